@@ -1,0 +1,38 @@
+# natscene: the workflow. Loads and validates the config, then includes one rule file per stage.
+# Run:  make run            (main job, config/config.yaml)
+#       make smoke          (tiny inputs)
+import sys
+from pathlib import Path
+
+ROOT = Path(workflow.basedir).resolve()
+sys.path.insert(0, str(ROOT / "src"))  # the library, also when the package is not pip-installed
+
+from natscene.config import load_yaml_config, resolve_path, validate_config
+from natscene.fingerprint import fingerprint
+
+if not config:  # no --configfile given: the main job on the bundled example
+    config.update(load_yaml_config(ROOT / "config" / "config.yaml"))
+validate_config(config, ROOT / "workflow" / "schemas" / "config.schema.yaml",
+                source=", ".join(map(str, workflow.configfiles)) or "config/config.yaml")
+
+RESULTS = config["results"]
+ALL_TARGETS = []  # each rule file appends the final products it wants built by `rule all`
+
+
+def src(path):
+    """An input path from the config, resolved against the repository root."""
+    return resolve_path(path, ROOT)
+
+
+def script(name):
+    return str(ROOT / "scripts" / name)
+
+
+for _rules in sorted((ROOT / "workflow" / "rules").glob("*.smk")):
+    include: str(_rules)
+
+
+rule all:
+    default_target: True
+    input:
+        ALL_TARGETS,

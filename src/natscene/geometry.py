@@ -1,0 +1,84 @@
+"""Scene geometry shared by every stage (DESIGN §3, Geometry): right-handed world, y up; a pinhole
+camera (position, look-at, up, vertical field of view, resolution); the sun as a parallel light given by
+azimuth (degrees from +z toward +x) and elevation (degrees above the horizon).
+
+Pixel (i, j) (row i from the top, column j from the left) looks through its centre. The image's right
+is ``right = normalize(forward x up)``, matching Mitsuba's ``perspective`` sensor with ``fov_axis='y'``
+and ``to_world = look_at(position, look_at, up)`` (verified in tests against Mitsuba).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+def sun_direction(azimuth_deg: float, elevation_deg: float) -> np.ndarray:
+    """Unit vector pointing *toward* the sun."""
+    az, el = np.radians(azimuth_deg), np.radians(elevation_deg)
+    return np.array([np.cos(el) * np.sin(az), np.sin(el), np.cos(el) * np.cos(az)])
+
+
+def _normalize(v) -> np.ndarray:
+    v = np.asarray(v, np.float64)
+    n = np.linalg.norm(v)
+    if n == 0:
+        raise ValueError("zero-length vector")
+    return v / n
+
+
+@dataclass(frozen=True)
+class Camera:
+    """A pinhole camera. ``fov`` is the vertical field of view in degrees; resolution is (width, height)."""
+
+    position: tuple
+    look_at: tuple
+    up: tuple = (0.0, 1.0, 0.0)
+    fov: float = 40.0
+    width: int = 320
+    height: int = 240
+
+    @classmethod
+    def from_view(cls, view: dict, resolution=None) -> "Camera":
+        """Build from a validated ``views.<name>`` config entry (``resolution`` overrides the view's)."""
+        cam = view["camera"]
+        w, h = resolution or view.get("resolution", (320, 240))
+        return cls(tuple(cam["position"]), tuple(cam["look_at"]), tuple(cam.get("up", (0, 1, 0))),
+                   float(cam.get("fov", 40.0)), int(w), int(h))
+
+    def basis(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(right, true_up, forward) unit vectors."""
+        fwd = _normalize(np.subtract(self.look_at, self.position))
+        right = np.cross(fwd, _normalize(self.up))
+        if np.linalg.norm(right) < 1e-9:
+            raise ValueError("camera 'up' is parallel to the viewing direction")
+        right = _normalize(right)
+        up = np.cross(right, fwd)
+        return right, up, fwd
+
+    def ray_directions(self, jitter: np.ndarray | None = None) -> np.ndarray:
+        """Unit ray directions (height, width, 3) through pixel centres (or centres + jitter in pixels)."""
+        right, up, fwd = self.basis()
+        tan_half = np.tan(np.radians(self.fov) / 2)
+        aspect = self.width / self.height
+        j = np.arange(self.width) + 0.5
+        i = np.arange(self.height) + 0.5
+        jj, ii = np.meshgrid(j, i)
+        if jitter is not None:
+            jj = jj + jitter[..., 0]
+            ii = ii + jitter[..., 1]
+        x = (2 * jj / self.width - 1) * tan_half * aspect
+        y = (1 - 2 * ii / self.height) * tan_half
+        d = x[..., None] * right + y[..., None] * up + fwd
+        return d / np.linalg.norm(d, axis=-1, keepdims=True)
+
+
+def ray_box(origins: np.ndarray, dirs: np.ndarray, lo, hi) -> tuple[np.ndarray, np.ndarray]:
+    """Slab test: entry and exit distances of rays with an axis-aligned box (t_exit < t_entry: miss)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        inv = 1.0 / dirs
+        t0 = (np.asarray(lo) - origins) * inv
+        t1 = (np.asarray(hi) - origins) * inv
+    tmin = np.nanmax(np.minimum(t0, t1), axis=-1)
+    tmax = np.nanmin(np.maximum(t0, t1), axis=-1)
+    return np.maximum(tmin, 0.0), tmax

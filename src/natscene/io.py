@@ -1,0 +1,321 @@
+"""Image and file I/O: the only module that touches OpenImageIO (DESIGN §2-3).
+
+- EXR read/write with any number of named channels, float32 or half, header attributes recording the
+  stage, its parameters and the library version;
+- every writer is atomic: it writes a temporary file beside the target and renames it, so an
+  interrupted or failing job never leaves a half-written file that Snakemake would take as done;
+- photographs (JPEG, PNG 8/16-bit, EXR) are read to linear float32 (sRGB decoding by colour-science);
+- PNG previews: linear -> exposure -> clip -> sRGB encoding, 8 bit. The default exposure maps the
+  99.5th percentile of luminance to 1 ("auto"), documented in the README.
+"""
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+import tempfile
+from pathlib import Path
+from typing import Iterator, Mapping, NamedTuple, Sequence
+
+import numpy as np
+import OpenImageIO as oiio
+import yaml
+
+from natscene import __version__
+from natscene.color import linear_to_srgb, luminance, srgb_to_linear
+
+ATTR_PREFIX = "natscene:"
+
+
+class InputError(ValueError):
+    """Bad user input (file, image, config value); the message names it and says what to do."""
+
+
+class Image(NamedTuple):
+    """An image read from disk: pixels (H, W, C) float32, channel names, header attributes."""
+
+    pixels: np.ndarray
+    channels: list[str]
+    attrs: dict
+
+    def channel(self, *names: str) -> np.ndarray:
+        """The named channels stacked on the last axis (one name: a 2-D array)."""
+        missing = [n for n in names if n not in self.channels]
+        if missing:
+            raise KeyError(f"channels {missing} not in image (has {self.channels[:12]}...)")
+        idx = [self.channels.index(n) for n in names]
+        return self.pixels[..., idx[0]] if len(idx) == 1 else self.pixels[..., idx]
+
+
+# ----------------------------------------------------------------------------------------- atomic
+@contextlib.contextmanager
+def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
+    """Yield a temporary path beside ``path`` (same extension); rename it onto ``path`` on success.
+
+    On any exception the temporary file is removed and ``path`` is left untouched.
+    """
+    path = Path(path)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise InputError(f"cannot create output directory {path.parent}: {e.strerror}. "
+                         f"Choose a writable results directory.") from e
+    if not os.access(path.parent, os.W_OK):
+        raise InputError(f"output directory {path.parent} is not writable; fix its permissions or run "
+                         f"the workflow in a writable directory (snakemake --directory).")
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=path.suffix or ".tmp", dir=path.parent)
+    os.close(fd)
+    tmp = Path(tmp)
+    try:
+        yield tmp
+        os.replace(tmp, path)
+    except BaseException:
+        with contextlib.suppress(FileNotFoundError):
+            tmp.unlink()
+        raise
+
+
+def write_text(path: str | os.PathLike, text: str) -> None:
+    """Write a text file atomically."""
+    with atomic_path(path) as tmp:
+        tmp.write_text(text)
+
+
+def write_yaml(path: str | os.PathLike, data) -> None:
+    """Write YAML atomically (plain Python types; numpy scalars/arrays are converted)."""
+    write_text(path, yaml.safe_dump(to_builtin(data), sort_keys=False))
+
+
+def read_yaml(path: str | os.PathLike):
+    """Read a YAML file, with a clear error when it is missing or malformed."""
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(f"{path}: file not found")
+    try:
+        return yaml.safe_load(path.read_text())
+    except yaml.YAMLError as e:
+        raise InputError(f"{path}: not valid YAML ({e})") from e
+
+
+def to_builtin(obj):
+    """Convert numpy scalars/arrays (recursively) to plain Python for YAML/JSON."""
+    if isinstance(obj, Mapping):
+        return {str(k): to_builtin(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [to_builtin(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return to_builtin(obj.tolist())
+    if isinstance(obj, np.generic):
+        return obj.item()
+    if isinstance(obj, Path):
+        return str(obj)
+    return obj
+
+
+# ------------------------------------------------------------------------------------------- EXR
+def _as_hwc(pixels: np.ndarray) -> np.ndarray:
+    a = np.asarray(pixels)
+    if a.ndim == 2:
+        a = a[..., None]
+    if a.ndim != 3:
+        raise ValueError(f"image must be (H, W) or (H, W, C), got shape {a.shape}")
+    return a
+
+
+def default_channel_names(n: int) -> list[str]:
+    """R,G,B,A-style names for 1-4 channels, else c0..c{n-1}."""
+    return {1: ["Y"], 2: ["Y", "A"], 3: ["R", "G", "B"], 4: ["R", "G", "B", "A"]}.get(n, [f"c{i}" for i in range(n)])
+
+
+def write_exr(path: str | os.PathLike, pixels: np.ndarray, channels: Sequence[str] | None = None,
+              attrs: Mapping | None = None, half: bool = False, stage: str | None = None) -> None:
+    """Write an OpenEXR image atomically.
+
+    ``pixels``: (H, W) or (H, W, C); ``channels``: C names (default R,G,B[,A]); ``attrs``: header
+    attributes (str/int/float stored natively, anything else as JSON), stored with the prefix
+    ``natscene:``; ``half`` stores 16-bit floats (use only where the error stays below 1e-3 relative).
+    """
+    a = _as_hwc(pixels)
+    h, w, c = a.shape
+    names = list(channels) if channels is not None else default_channel_names(c)
+    if len(names) != c:
+        raise ValueError(f"{path}: {c} channels but {len(names)} channel names")
+    if len(set(names)) != len(names):
+        raise ValueError(f"{path}: duplicate channel names")
+    spec = oiio.ImageSpec(w, h, c, oiio.HALF if half else oiio.FLOAT)
+    spec.channelnames = tuple(names)
+    spec.attribute("compression", "zip")
+    spec.attribute(ATTR_PREFIX + "version", __version__)
+    if stage:
+        spec.attribute(ATTR_PREFIX + "stage", stage)
+    for key, value in (attrs or {}).items():
+        key = ATTR_PREFIX + str(key)
+        value = to_builtin(value)
+        if isinstance(value, bool) or not isinstance(value, (str, int, float)):
+            spec.attribute(key, "json:" + json.dumps(value))
+        elif isinstance(value, int) and not (-2**31 <= value < 2**31):
+            spec.attribute(key, "json:" + json.dumps(value))
+        else:
+            spec.attribute(key, value)
+    data = np.ascontiguousarray(a, dtype=np.float16 if half else np.float32)
+    with atomic_path(path) as tmp:
+        out = oiio.ImageOutput.create(str(tmp))
+        if out is None or not out.open(str(tmp), spec):
+            raise OSError(f"cannot open {path} for writing: {oiio.geterror()}")
+        try:
+            if not out.write_image(data):
+                raise OSError(f"cannot write {path}: {out.geterror()}")
+        finally:
+            out.close()
+
+
+def _attr_value(v):
+    if isinstance(v, str) and v.startswith("json:"):
+        return json.loads(v[5:])
+    return v
+
+
+def read_exr(path: str | os.PathLike) -> Image:
+    """Read an OpenEXR (or any OIIO-readable) image as float32 (H, W, C) with names and attributes.
+
+    Attributes written by :func:`write_exr` come back without their ``natscene:`` prefix.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(f"{path}: file not found")
+    inp = oiio.ImageInput.open(str(path))
+    if inp is None:
+        raise InputError(f"{path}: cannot read image ({oiio.geterror()})")
+    try:
+        spec = inp.spec()
+        pixels = inp.read_image(0, 0, 0, spec.nchannels, oiio.FLOAT)
+        if pixels is None:
+            raise InputError(f"{path}: cannot decode pixels ({inp.geterror()})")
+        attrs = {}
+        for p in spec.extra_attribs:
+            name = p.name[len(ATTR_PREFIX):] if p.name.startswith(ATTR_PREFIX) else p.name
+            attrs[name] = _attr_value(p.value)
+        pixels = np.asarray(pixels, np.float32).reshape(spec.height, spec.width, spec.nchannels)
+        return Image(pixels, list(spec.channelnames), attrs)
+    finally:
+        inp.close()
+
+
+# ----------------------------------------------------------------------------------------- photos
+def read_photo(path: str | os.PathLike, keep_alpha: bool = False) -> np.ndarray:
+    """Read a photograph to linear float32 (H, W, C).
+
+    8/16-bit JPEG/PNG/TIFF are sRGB-decoded with colour-science; float formats (EXR, HDR) are taken as
+    linear. Alpha is dropped unless ``keep_alpha``. Greyscale images come back with C = 1.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(f"{path}: photo not found")
+    inp = oiio.ImageInput.open(str(path))
+    if inp is None:
+        raise InputError(f"{path}: not a readable image ({oiio.geterror().strip() or 'unknown format'})")
+    try:
+        spec = inp.spec()
+        is_float = spec.format.basetype in (oiio.FLOAT, oiio.HALF, oiio.DOUBLE)
+        pixels = inp.read_image(0, 0, 0, spec.nchannels, oiio.FLOAT)
+        if pixels is None:
+            raise InputError(f"{path}: cannot decode image ({inp.geterror()})")
+        a = np.asarray(pixels, np.float32).reshape(spec.height, spec.width, spec.nchannels)
+        alpha_idx = spec.alpha_channel
+    finally:
+        inp.close()
+    alpha = None
+    if alpha_idx >= 0:
+        alpha = a[..., alpha_idx:alpha_idx + 1]
+        a = np.delete(a, alpha_idx, axis=-1)
+    if a.shape[-1] == 2:  # luminance + something: keep luminance
+        a = a[..., :1]
+    a = a[..., :3]
+    if not is_float:
+        a = srgb_to_linear(a)
+    if keep_alpha and alpha is not None:
+        a = np.concatenate([a, alpha], axis=-1)
+    return np.ascontiguousarray(a, np.float32)
+
+
+def read_mask(path: str | os.PathLike) -> np.ndarray:
+    """Read a mask image as float32 (H, W) in [0, 1] without any colour decoding (first channel)."""
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(f"{path}: mask not found")
+    inp = oiio.ImageInput.open(str(path))
+    if inp is None:
+        raise InputError(f"{path}: not a readable image ({oiio.geterror()})")
+    try:
+        spec = inp.spec()
+        a = np.asarray(inp.read_image(0, 0, 0, spec.nchannels, oiio.FLOAT), np.float32)
+    finally:
+        inp.close()
+    return a.reshape(spec.height, spec.width, spec.nchannels)[..., 0].copy()
+
+
+# ------------------------------------------------------------------------------------------- PNG
+def auto_exposure(linear: np.ndarray, percentile: float = 99.5) -> float:
+    """Exposure that maps the given percentile of luminance (of finite, positive pixels) to 1."""
+    a = _as_hwc(linear)
+    y = luminance(a) if a.shape[-1] >= 3 else a[..., 0]
+    y = y[np.isfinite(y) & (y > 0)]
+    if y.size == 0:
+        return 1.0
+    p = float(np.percentile(y, percentile))
+    return 1.0 / p if p > 0 else 1.0
+
+
+def to_srgb8(linear: np.ndarray, exposure: float | str | None = "auto") -> np.ndarray:
+    """The documented preview tone map: ``sRGB_encode(clip(exposure * linear, 0, 1))`` as uint8.
+
+    ``exposure="auto"`` uses :func:`auto_exposure`; ``None`` or 1 means no scaling.
+    """
+    a = _as_hwc(linear).astype(np.float32)
+    if a.shape[-1] == 1:
+        a = np.repeat(a, 3, axis=-1)
+    if a.shape[-1] == 2:
+        a = np.concatenate([a[..., :1]] * 3, axis=-1)
+    rgb = a[..., :3]
+    k = auto_exposure(rgb) if exposure == "auto" else (1.0 if exposure is None else float(exposure))
+    rgb = np.nan_to_num(rgb * k, nan=0.0, posinf=1.0, neginf=0.0)
+    return np.round(linear_to_srgb(rgb) * 255.0).astype(np.uint8)
+
+
+def write_png(path: str | os.PathLike, image: np.ndarray, exposure: float | str | None = "auto",
+              encoded: bool = False) -> None:
+    """Write an 8-bit sRGB PNG preview atomically.
+
+    ``image`` is linear (tone-mapped by :func:`to_srgb8`) unless ``encoded`` is True, in which case it
+    is already display-encoded: uint8, or float in [0, 1].
+    """
+    if encoded:
+        a = _as_hwc(image)
+        data = a if a.dtype == np.uint8 else np.round(np.clip(a, 0, 1) * 255).astype(np.uint8)
+    else:
+        data = to_srgb8(image, exposure)
+    h, w, c = data.shape
+    spec = oiio.ImageSpec(w, h, c, oiio.UINT8)
+    with atomic_path(path) as tmp:
+        out = oiio.ImageOutput.create(str(tmp))
+        if out is None or not out.open(str(tmp), spec):
+            raise OSError(f"cannot open {path} for writing: {oiio.geterror()}")
+        try:
+            if not out.write_image(np.ascontiguousarray(data)):
+                raise OSError(f"cannot write {path}: {out.geterror()}")
+        finally:
+            out.close()
+
+
+def read_image_u8(path: str | os.PathLike) -> np.ndarray:
+    """Read an 8-bit image (PNG/JPEG) as stored, uint8 (H, W, C), no colour decoding."""
+    path = Path(path)
+    inp = oiio.ImageInput.open(str(path))
+    if inp is None:
+        raise InputError(f"{path}: not a readable image ({oiio.geterror()})")
+    try:
+        spec = inp.spec()
+        a = np.asarray(inp.read_image(0, 0, 0, spec.nchannels, oiio.UINT8), np.uint8)
+    finally:
+        inp.close()
+    return a.reshape(spec.height, spec.width, spec.nchannels)

@@ -1,0 +1,50 @@
+"""The thin-script harness: logging to the rule's log file and the terminal, clean error reporting.
+
+Every ``scripts/*.py`` ends with ``run(snakemake, main)``. A :class:`natscene.io.InputError` or
+:class:`natscene.config.ConfigError` (bad input, named by file or key) is reported as one line without a
+traceback and the job fails; anything else is a bug and keeps its traceback.
+"""
+from __future__ import annotations
+
+import logging
+import sys
+import time
+from pathlib import Path
+
+from natscene.config import ConfigError
+from natscene.io import InputError
+
+
+def setup_logging(log_path: str | None, name: str = "natscene") -> logging.Logger:
+    """A logger writing to stderr and (if given) the rule's log file, with elapsed-time stamps."""
+    logger = logging.getLogger(name)
+    logger.setLevel(logging.INFO)
+    logger.handlers.clear()
+    start = time.perf_counter()
+
+    class _Elapsed(logging.Formatter):
+        def format(self, record):
+            record.elapsed = f"{time.perf_counter() - start:7.1f}s"
+            return super().format(record)
+
+    fmt = _Elapsed("[%(elapsed)s] %(levelname)s %(message)s")
+    handlers = [logging.StreamHandler(sys.stderr)]
+    if log_path:
+        Path(log_path).parent.mkdir(parents=True, exist_ok=True)
+        handlers.append(logging.FileHandler(log_path, mode="w"))
+    for h in handlers:
+        h.setFormatter(fmt)
+        logger.addHandler(h)
+    logger.propagate = False
+    return logger
+
+
+def run(snakemake, main) -> None:
+    """Call ``main(snakemake, logger)``; report bad input in one line and exit non-zero."""
+    log_path = snakemake.log[0] if len(snakemake.log) else None
+    logger = setup_logging(log_path)
+    try:
+        main(snakemake, logger)
+    except (InputError, ConfigError) as e:
+        logger.error(f"rule {snakemake.rule}: {e}")
+        sys.exit(1)

@@ -1,0 +1,23 @@
+# Stage: volume generation (Dobashi 2012 §3: procedural cloud volumes in the style of Ebert et al.)
+
+rule volume:
+    output:
+        density=f"{RESULTS}/volumes/{{volume}}/density.vol",
+        preview_exr=f"{RESULTS}/volumes/{{volume}}/preview.exr",
+        preview_png=f"{RESULTS}/volumes/{{volume}}/preview.png",
+        meta=f"{RESULTS}/volumes/{{volume}}/meta.yaml",
+    input:
+        lambda wc: [src(config["volumes"][wc.volume]["path"])] if config["volumes"][wc.volume]["kind"] == "file" else [],
+    params:
+        spec=lambda wc: config["volumes"][wc.volume],
+        code=fingerprint("volume", "io"),
+    log:
+        f"{RESULTS}/logs/volume/{{volume}}.log",
+    threads: 2
+    resources:
+        mem_mb=4000,
+    script:
+        script("volume.py")
+
+
+ALL_TARGETS.extend(expand(f"{RESULTS}/volumes/{{volume}}/preview.png", volume=config["volumes"]))
