@@ -1,0 +1,124 @@
+"""The sky stage on one photo (Dobashi 2012 §4.1): classify cloud / sky / neither, interpolate the sky
+behind the clouds (∇²L_sky = 0), estimate the sunlight colour c_in, and the soft cloud alpha.
+
+The Laplace solve treats every non-sky pixel (cloud and neither) as unknown, grown by ``solve_margin``
+pixels (a dilation with a 3x3 cross, repeated) so that the bright, semi-transparent cloud fringe that the
+classifier left in the sky class does not leak into L_sky; L_sky equals the photo on all other pixels.
+"""
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+
+import cv2
+import numpy as np
+
+from natscene.io import InputError
+from natscene.sky.laplace import solve_laplace
+from natscene.sky.segmentation import CLOUD, NEITHER, SKY, check_colour_photo, classify, soft_alpha
+from natscene.sky.sun_colour import SunColour, sun_colour
+
+
+@dataclass
+class SkySettings:
+    """Parameters of the stage (defaults = workflow/schemas/sky.schema.yaml)."""
+
+    threshold: float | None = None  # s_ab threshold; None = Otsu
+    min_lightness: float = 20.0
+    morphology_radius: int = 2
+    min_region_fraction: float = 1e-4
+    solve_margin: int = 3
+    clip_level: float = 0.99
+    grey_chroma: float = 3.0
+    overcast_cloud_fraction: float = 0.8
+
+    @classmethod
+    def from_config(cls, *sections: dict) -> "SkySettings":
+        """Settings from config dicts, later ones overriding earlier (unknown keys ignored)."""
+        names = set(cls.__dataclass_fields__)
+        kw = {}
+        for s in sections:
+            kw.update({k: v for k, v in (s or {}).items() if k in names})
+        return cls(**kw)
+
+
+@dataclass
+class SkyResult:
+    photo: np.ndarray  # (H, W, 3) linear
+    labels: np.ndarray  # (H, W) uint8: 0 sky, 1 cloud, 2 neither
+    alpha: np.ndarray  # (H, W) float32 soft cloud alpha
+    sky: np.ndarray  # (H, W, 3) L_sky
+    solved: np.ndarray  # (H, W) bool: pixels interpolated by the Laplace solve
+    sun: SunColour
+    classify_info: dict
+    settings: SkySettings
+    warnings: list = field(default_factory=list)
+
+    def summary(self) -> dict:
+        """The sun.yaml content."""
+        lab = self.labels
+        h, w = lab.shape
+        return {
+            "c_in": [float(x) for x in self.sun.c_in],
+            "c_in_normalisation": "mean linear RGB of the brighter cloud pixels divided by its Rec.709 "
+                                  "luminance (Y(c_in) = 1)",
+            "c_in_mean_rgb": [float(x) for x in self.sun.mean_rgb],
+            "c_in_chroma": self.sun.chroma,
+            "thresholds": {"saturation": self.classify_info["threshold"],
+                           "saturation_source": self.classify_info["threshold_source"],
+                           "saturation_measure": self.classify_info["measure"],
+                           "brightness": self.sun.grey_threshold,
+                           "brightness_measure": "Rec.709 luminance of linear RGB, Otsu over cloud pixels"},
+            "pixels": {"width": w, "height": h, "sky": int((lab == SKY).sum()), "cloud": int((lab == CLOUD).sum()),
+                       "neither": int((lab == NEITHER).sum()), "solved": int(self.solved.sum()),
+                       **self.sun.counts},
+            "hand_mask_pixels": self.classify_info["hand_mask_pixels"],
+            "overcast": self.sun.overcast,
+            "warnings": list(self.warnings),
+            "settings": asdict(self.settings),
+        }
+
+
+def solve_region(labels: np.ndarray, margin: int) -> np.ndarray:
+    """Non-sky pixels grown by ``margin`` px (4-connected), but never the whole image when sky exists."""
+    unknown = labels != SKY
+    if margin > 0 and unknown.any():
+        k = cv2.getStructuringElement(cv2.MORPH_CROSS, (3, 3))
+        grown = cv2.dilate(unknown.astype(np.uint8), k, iterations=int(margin)).astype(bool)
+        if not grown.all():
+            unknown = grown
+    return unknown
+
+
+def extract_sky(photo: np.ndarray, settings: SkySettings | None = None,
+                hand_mask: np.ndarray | None = None, name: str = "photo") -> SkyResult:
+    """Run §4.1 on a linear RGB photo (H, W, 3); ``hand_mask`` from :func:`decode_hand_mask` or None."""
+    st = settings or SkySettings()
+    photo = check_colour_photo(photo, name)
+    labels, info = classify(photo, st.threshold, st.min_lightness, st.morphology_radius,
+                            st.min_region_fraction, hand_mask)
+    if not (labels == SKY).any():
+        raise InputError(f"{name}: no sky pixels found (threshold {info['threshold']:.4g}, "
+                         f"{info['threshold_source']}): the sky behind the clouds cannot be interpolated. Use "
+                         f"a photo with some blue sky, set photos.<name>.threshold, or paint sky (black) in a mask")
+    if not (labels == CLOUD).any():
+        raise InputError(f"{name}: no cloud pixels found (threshold {info['threshold']:.4g}, "
+                         f"{info['threshold_source']}): set photos.<name>.threshold higher or paint cloud (white) "
+                         f"in a mask")
+    solved = solve_region(labels, st.solve_margin)
+    sky = solve_laplace(photo, solved)
+    sun = sun_colour(photo, labels, st.clip_level, st.grey_chroma, st.overcast_cloud_fraction)
+    alpha = soft_alpha(photo, sky, labels, sun.c_in)
+    return SkyResult(photo, labels, alpha, sky, solved, sun, info, st, list(sun.warnings))
+
+
+def preview_panels(res: SkyResult) -> np.ndarray:
+    """Linear preview mosaic: photo | mask (cloud alpha grey, sky dark blue, neither red) | sky | c_in swatch."""
+    h, w = res.labels.shape
+    mask = np.repeat(res.alpha[..., None], 3, -1).astype(np.float32)
+    mask = np.where((res.labels == CLOUD)[..., None], np.maximum(mask, 0.05), mask)
+    mask[res.labels == SKY] = (0.0, 0.0, 0.08)
+    mask[res.labels == NEITHER] = (0.6, 0.0, 0.0)
+    sw = max(8, w // 4)
+    swatch = np.broadcast_to((res.sun.c_in / res.sun.c_in.max()).astype(np.float32), (h, sw, 3))
+    gap = np.ones((h, max(2, w // 160), 3), np.float32)
+    return np.concatenate([res.photo, gap, mask, gap, res.sky, gap, swatch], axis=1)
