@@ -24,7 +24,7 @@ def src(path):
     return resolve_path(path, ROOT)
 
 
-def script(name):
+def script_path(name):
     return str(ROOT / "scripts" / name)
 
 

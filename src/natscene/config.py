@@ -39,21 +39,67 @@ def _describe(error) -> str:
     return f"config key '{where}': {error.message}{expected}"
 
 
+def bundle_schema(path: str | os.PathLike) -> dict:
+    """Load a schema and inline every ``$ref`` (other files, relative to the referring file, and local
+    ``#/...`` pointers) into one document.
+
+    Needed because ``snakemake.utils.validate`` fills defaults only where its validator reaches without a
+    ``$ref`` (a ``$ref`` descends with the plain validator, so defaults inside referenced files would be lost).
+    """
+    path = Path(path).resolve()
+
+    def resolve(node, root, base):
+        if isinstance(node, list):
+            return [resolve(v, root, base) for v in node]
+        if not isinstance(node, dict):
+            return node
+        if "$ref" in node:
+            ref = node["$ref"]
+            siblings = {k: v for k, v in node.items() if k != "$ref"}
+            file_part, _, pointer = ref.partition("#")
+            if file_part:
+                target_path = (base / file_part).resolve()
+                target_root = yaml.safe_load(target_path.read_text())
+                target_base = target_path.parent
+            else:
+                target_root, target_base = root, base
+            target = target_root
+            for part in [p for p in pointer.split("/") if p]:
+                target = target[part]
+            out = resolve(target, target_root, target_base)
+            out = {k: v for k, v in out.items() if k not in ("$schema", "$id", "$defs")}
+            out.update(resolve(siblings, root, base))
+            return out
+        return {k: resolve(v, root, base) for k, v in node.items() if k != "$defs" or node is root}
+
+    root = yaml.safe_load(path.read_text())
+    bundled = resolve(root, root, path.parent)
+    bundled.pop("$defs", None)
+    return bundled
+
+
 def validate_config(config: dict, schema: str | os.PathLike, source: str = "config") -> dict:
     """Validate ``config`` in place (defaults filled in) or raise :class:`ConfigError` naming the key."""
+    import json
+    import tempfile
+
     import jsonschema
-    from snakemake.exceptions import WorkflowError
     from snakemake.utils import validate
 
+    bundled = bundle_schema(schema)
+    with tempfile.NamedTemporaryFile("w", suffix=".schema.json", delete=False) as f:
+        json.dump(bundled, f)
+        bundled_path = f.name
     try:
-        validate(config, str(schema), set_default=True)
-    except (WorkflowError, jsonschema.ValidationError) as e:
-        errs = [a for a in getattr(e, "args", ()) if isinstance(a, jsonschema.ValidationError)]
-        if isinstance(e, jsonschema.ValidationError):
-            errs = [e]
+        validate(config, bundled_path, set_default=True)
+    except Exception as e:  # noqa: BLE001 - snakemake wraps the ValidationError in its WorkflowError
+        candidates = [e, *getattr(e, "args", ()), e.__cause__, e.__context__]
+        errs = [a for a in candidates if isinstance(a, jsonschema.ValidationError)]
         if not errs:
             raise
         raise ConfigError(f"{source}: invalid configuration: {_describe(errs[0])}") from None
+    finally:
+        os.unlink(bundled_path)
     return config
 
 

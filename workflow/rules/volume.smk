@@ -17,7 +17,7 @@ rule volume:
     resources:
         mem_mb=4000,
     script:
-        script("volume.py")
+        script_path("volume.py")
 
 
 ALL_TARGETS.extend(expand(f"{RESULTS}/volumes/{{volume}}/preview.png", volume=config["volumes"]))
