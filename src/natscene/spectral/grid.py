@@ -1,0 +1,116 @@
+"""Wavelength grid and spectrum -> CIE XYZ -> linear sRGB (Dong 2007 §2.4, the colour-transformation stage).
+
+Spectra are sampled on a regular grid (default 380-780 nm every 5 nm, 81 samples). Tristimulus values are
+``X_k = kappa * sum_i S(lambda_i) xbar_k(lambda_i) dlambda`` with the CIE 1931 2° colour-matching functions
+(Dong §2.4). ``kappa`` is fixed once for the whole project: it makes the CIE D65 SPD (as tabulated, 100 at
+560 nm) integrate to Y = 1, so a *radiance* spectrum equal to D65 is the linear-sRGB white (1, 1, 1) that the
+RGB part of the renderer uses, and a reflectance R lit by D65 gives its usual XYZ (Y = luminance factor).
+XYZ -> linear sRGB goes through :mod:`natscene.color` (colour-science).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import lru_cache
+
+import colour
+import numpy as np
+
+from natscene.color import xyz_to_linear_srgb
+
+CMFS_NAME = "CIE 1931 2 Degree Standard Observer"
+
+
+@dataclass(frozen=True)
+class WavelengthGrid:
+    """Regular wavelength sampling in nm, both ends included."""
+
+    start: float = 380.0
+    stop: float = 780.0
+    step: float = 5.0
+
+    def __post_init__(self):
+        if not (self.step > 0 and self.stop > self.start):
+            raise ValueError(f"bad wavelength grid {self.start}-{self.stop} step {self.step}")
+        n = (self.stop - self.start) / self.step
+        if abs(n - round(n)) > 1e-9:
+            raise ValueError("wavelength grid: (stop - start) must be a multiple of step")
+
+    @property
+    def wavelengths(self) -> np.ndarray:
+        return self.start + self.step * np.arange(self.size)
+
+    @property
+    def size(self) -> int:
+        return int(round((self.stop - self.start) / self.step)) + 1
+
+    def channel_names(self, prefix: str = "S") -> list[str]:
+        """EXR channel names of the spectral part of the hybrid image (Dong §2.3.2): S380 ... S780."""
+        return [f"{prefix}{w:g}" for w in self.wavelengths]
+
+    @property
+    def shape(self) -> "colour.SpectralShape":
+        return colour.SpectralShape(self.start, self.stop, self.step)
+
+
+DEFAULT_GRID = WavelengthGrid()
+
+
+@lru_cache(maxsize=8)
+def _cmfs(grid: WavelengthGrid) -> np.ndarray:
+    cmfs = colour.MSDS_CMFS[CMFS_NAME].copy().align(grid.shape)
+    return np.asarray(cmfs.values, np.float64)  # (N, 3)
+
+
+def cmfs(grid: WavelengthGrid = DEFAULT_GRID) -> np.ndarray:
+    """CIE 1931 2° xbar, ybar, zbar sampled on the grid, shape (N, 3)."""
+    return _cmfs(grid).copy()
+
+
+@lru_cache(maxsize=8)
+def _d65_table(grid: WavelengthGrid) -> np.ndarray:
+    sd = colour.SDS_ILLUMINANTS["D65"].copy().align(grid.shape)
+    return np.asarray(sd.values, np.float64)
+
+
+@lru_cache(maxsize=8)
+def kappa(grid: WavelengthGrid = DEFAULT_GRID) -> float:
+    """The constant of Dong's X_k = kappa ∫ I xbar_k dlambda: D65 (tabulated) integrates to Y = 1."""
+    return float(1.0 / (_d65_table(grid) @ _cmfs(grid)[:, 1] * grid.step))
+
+
+def integration_matrix(grid: WavelengthGrid = DEFAULT_GRID) -> np.ndarray:
+    """(N, 3) matrix W with XYZ = S @ W, i.e. W = kappa * cmfs * dlambda."""
+    return _cmfs(grid) * (kappa(grid) * grid.step)
+
+
+def spectrum_to_xyz(spectra: np.ndarray, grid: WavelengthGrid = DEFAULT_GRID) -> np.ndarray:
+    """CIE XYZ of radiance spectra (..., N) (Dong §2.4)."""
+    s = np.asarray(spectra)
+    if s.shape[-1] != grid.size:
+        raise ValueError(f"spectra have {s.shape[-1]} samples, grid has {grid.size}")
+    return s @ integration_matrix(grid).astype(s.dtype if s.dtype == np.float32 else np.float64)
+
+
+def spectrum_to_rgb(spectra: np.ndarray, grid: WavelengthGrid = DEFAULT_GRID) -> np.ndarray:
+    """Linear sRGB of radiance spectra (..., N): X_k integration, then M_XYZ->sRGB (colour-science)."""
+    return xyz_to_linear_srgb(spectrum_to_xyz(spectra, grid))
+
+
+@lru_cache(maxsize=8)
+def _xyz_to_rgb_matrix() -> np.ndarray:
+    return np.asarray(xyz_to_linear_srgb(np.eye(3)), np.float64).T  # rgb = M @ xyz
+
+
+def spectrum_to_rgb_matrix(grid: WavelengthGrid = DEFAULT_GRID) -> np.ndarray:
+    """(N, 3) matrix taking spectra straight to linear sRGB (rgb = S @ A), for hot paths.
+
+    Equal to ``integration_matrix(grid) @ M_XYZ->sRGB^T``; M taken from :mod:`natscene.color`.
+    """
+    return integration_matrix(grid) @ _xyz_to_rgb_matrix().T
+
+
+def reflectance_to_rgb(reflectance: np.ndarray, illuminant: np.ndarray | None = None,
+                       grid: WavelengthGrid = DEFAULT_GRID) -> np.ndarray:
+    """Linear sRGB of reflectance spectra (..., N) under an illuminant SPD (default D65)."""
+    illum = _d65_table(grid) if illuminant is None else np.asarray(illuminant, np.float64)
+    return spectrum_to_rgb(np.asarray(reflectance, np.float64) * illum, grid)
