@@ -94,8 +94,11 @@ def extract_sky(photo: np.ndarray, settings: SkySettings | None = None,
     """Run §4.1 on a linear RGB photo (H, W, 3); ``hand_mask`` from :func:`decode_hand_mask` or None."""
     st = settings or SkySettings()
     photo = check_colour_photo(photo, name)
-    labels, info = classify(photo, st.threshold, st.min_lightness, st.morphology_radius,
-                            st.min_region_fraction, hand_mask)
+    try:
+        labels, info = classify(photo, st.threshold, st.min_lightness, st.morphology_radius,
+                                st.min_region_fraction, hand_mask)
+    except InputError as e:
+        raise InputError(f"{name}: {e}; set photos.<name>.threshold or paint a mask") from None
     if not (labels == SKY).any():
         raise InputError(f"{name}: no sky pixels found (threshold {info['threshold']:.4g}, "
                          f"{info['threshold_source']}): the sky behind the clouds cannot be interpolated. Use "

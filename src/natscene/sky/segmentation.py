@@ -25,7 +25,6 @@ from __future__ import annotations
 
 import cv2
 import numpy as np
-from skimage.filters import threshold_otsu
 
 from natscene.color import linear_srgb_to_lab
 from natscene.io import InputError
@@ -58,12 +57,26 @@ def saturation(photo: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def otsu_threshold(values: np.ndarray, nbins: int = 256) -> float:
-    """Otsu's (1979) threshold of a 1-D sample (InputError when it has a single value)."""
+    """Otsu's (1979) threshold of a 1-D sample: the histogram split maximising the between-class variance.
+
+    Returned as the bin *edge* between the two classes, so that ``values < t`` is exactly the lower class
+    (skimage's ``threshold_otsu`` returns a bin centre, which misplaces values inside the boundary bin).
+    InputError when the sample has a single value.
+    """
     v = np.asarray(values, np.float64).ravel()
     v = v[np.isfinite(v)]
     if v.size == 0 or np.ptp(v) == 0:
         raise InputError("cannot choose a threshold automatically: all candidate pixels have the same value")
-    return float(threshold_otsu(v, nbins=nbins))
+    hist, edges = np.histogram(v, bins=nbins)
+    centres = 0.5 * (edges[:-1] + edges[1:])
+    w0 = np.cumsum(hist)[:-1].astype(np.float64)
+    w1 = v.size - w0
+    s0 = np.cumsum(hist * centres)[:-1]
+    m0 = s0 / np.maximum(w0, 1)
+    m1 = (np.sum(hist * centres) - s0) / np.maximum(w1, 1)
+    between = w0 * w1 * (m0 - m1) ** 2
+    k = int(np.argmax(between))
+    return float(edges[k + 1])
 
 
 def decode_hand_mask(mask: np.ndarray, shape: tuple[int, int], name: str = "mask") -> np.ndarray:
