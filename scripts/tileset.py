@@ -1,0 +1,58 @@
+"""Rule `tileset`: GA-optimised ω-tile set from an example texture (Dong 2007 Ch. 5)."""
+import numpy as np
+
+from natscene.io import InputError, read_photo, write_exr, write_png, write_yaml
+from natscene.runner import run
+from natscene.tiles.construct import construct, diagram, to_atlas
+from natscene.tiles.embed import embed, grabcut_object
+from natscene.tiles.genetic import GAParams
+from natscene.tiles.omega import tile_set
+
+
+def main(snakemake, log):
+    spec = snakemake.params.spec
+    name = snakemake.wildcards.texture
+    example = read_photo(snakemake.input.example)
+    s = int(spec["tile_size"])
+    H, W = example.shape[:2]
+    if s > min(H, W):
+        raise InputError(f"config key 'tiles.{name}.tile_size': {s} exceeds the example "
+                         f"{snakemake.input.example} ({W}x{H}); choose at most {min(H, W) // 2 * 2}")
+    ts = tile_set(spec["set"])
+    params = GAParams.from_dict(spec["ga"])
+    log.info(f"{name}: example {W}x{H}, set {ts.name} ({ts.m} tiles, {ts.n} patches), tile {s}px")
+    b = construct(example, ts, s, params, seed=int(spec["seed"]), margin=float(spec["margin"]))
+    log.info(f"GA: E {b.ga.initial_best_E:.2f} (best initial) -> {b.ga.E:.2f} after "
+             f"{len(b.ga.log) - 1} generations, {b.ga.evaluations} evaluations")
+    tiles = b.tiles
+    if tiles.shape[-1] == 1:
+        tiles = np.repeat(tiles, 3, -1)
+    embedded = []
+    for k, item in enumerate(spec.get("embed", [])):
+        j = int(item["tile"])
+        if j >= ts.m:
+            raise InputError(f"config key 'tiles.{name}.embed[{k}].tile': {j} >= {ts.m} tiles in set {ts.name}")
+        try:
+            obj, mask = grabcut_object(read_photo(snakemake.input.embed[k]), item["rect"])
+        except ValueError as e:
+            raise InputError(f"config key 'tiles.{name}.embed[{k}]': {e}") from e
+        tiles[j] = embed(tiles[j], obj, mask, float(item.get("size", 0.6)), float(spec["margin"]))
+        embedded.append(j)
+    attrs = {"set": ts.name, "tile_size": s, "tiles": ts.m}
+    write_exr(snakemake.output.atlas, to_atlas(tiles), channels=["R", "G", "B"], attrs=attrs,
+              stage="tileset")
+    write_png(snakemake.output.png, diagram(tiles, ts), encoded=True)
+    write_yaml(snakemake.output.meta, {
+        "set": ts.name, "tile_size": s, "colours": list(ts.colours),
+        "tiles": [{"index": j, "corners": list(t), "label": lab, "matching_patch": b.ga.matches[j],
+                   "D": b.ga.D[j], "seam_cost": b.seam_costs[j], "embedded": j in embedded}
+                  for j, (t, lab) in enumerate(zip(ts.as_tuples(), ts.labels()))],
+        "patches": {c: b.ga.genes[i] for i, c in enumerate(ts.colours)},
+        "example": str(snakemake.input.example), "example_size": [W, H],
+        "ga": {"params": vars(params), "seed": int(spec["seed"]), "E": b.ga.E,
+               "initial_best_E": b.ga.initial_best_E, "initial_mean_E": b.ga.initial_mean_E,
+               "evaluations": b.ga.evaluations, "log": b.ga.log},
+    })
+
+
+run(snakemake, main)

@@ -1,0 +1,171 @@
+"""ω-tile sets (Dong 2007 §5.3, Fig. 5.3; Ng et al. 2005) and the scan-line completability check.
+
+An ω-tile is cut from the centre of a 2×2 block of square sample patches, so each of its four quarters
+is a quarter of one patch; the patch (its "colour square") contributing to a corner is the tile's corner
+colour. Tiles are written ``<TL, TR, BL, BR>`` (row-major corners). In a tiling the colours live on the
+vertices of the tile grid: the tile at (i, j) is ``<c(i,j), c(i+1,j), c(i,j+1), c(i+1,j+1)>``; two
+neighbouring tiles share the two colours of their common edge, so their pixels continue the same patch
+across the border (the quarters meeting at a vertex are the four quarters of one patch).
+
+Scan-line tiling fixes TL, TR (from the tile above) and BL (from the tile on the left); BR is free
+("don't care", Ng et al.). A set is *completable* when every triple that can arise has a tile.
+
+The basic set B (8 tiles, squares P = {R, G, B, Y}) is the unique-up-to-order balanced 8-tile set with
+the tiles <R,G,G,B> and <B,Y,Y,R> named in §5.3.2 in which every tile but <R,G,G,B> holds exactly one
+yellow except the double-yellow <B,Y,Y,R>, and which is closed under scan-line tiling (found by
+exhaustive search; see :func:`basic_set`). The extension rule of §5.3.2 (:func:`extend`): pick a
+reference colour, add the copy of every tile holding it with the reference replaced by a new colour,
+and for every tile with the reference colour twice add the two tiles where only one is replaced
+(the "additional" tiles needed where the old and new colour must be matched at once, Fig. 5.4).
+N1 = extend(B, Y -> C) (17 tiles), N2 = extend(N1, R -> M).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from itertools import product
+
+import numpy as np
+
+#: display colours of the squares (sRGB 0..1), for tile-set diagrams
+SQUARE_RGB = {"R": (0.85, 0.15, 0.15), "G": (0.15, 0.7, 0.2), "B": (0.15, 0.3, 0.9),
+              "Y": (0.95, 0.85, 0.1), "C": (0.1, 0.85, 0.9), "M": (0.85, 0.2, 0.85)}
+
+#: the basic size-8 ω-tile set B, corners (TL, TR, BL, BR)
+BASIC_TILES = (
+    ("R", "G", "G", "B"), ("R", "G", "Y", "B"),
+    ("B", "Y", "Y", "R"), ("B", "Y", "G", "R"),
+    ("G", "B", "B", "Y"), ("G", "R", "B", "Y"),
+    ("Y", "B", "R", "G"), ("Y", "R", "R", "G"),
+)
+
+
+@dataclass(frozen=True)
+class TileSet:
+    """An ω-tile set: ``colours`` (square names, index = patch/gene index) and ``tiles`` (m, 4) int
+    corner colour indices in the order TL, TR, BL, BR."""
+
+    name: str
+    colours: tuple[str, ...]
+    tiles: np.ndarray = field(compare=False)
+
+    @property
+    def m(self) -> int:
+        return int(self.tiles.shape[0])
+
+    @property
+    def n(self) -> int:
+        return len(self.colours)
+
+    def labels(self) -> list[str]:
+        return ["<" + ",".join(self.colours[c] for c in t) + ">" for t in self.tiles]
+
+    def as_tuples(self) -> list[tuple[str, str, str, str]]:
+        return [tuple(self.colours[c] for c in t) for t in self.tiles]
+
+
+def _from_tuples(name: str, tuples, colours=None) -> TileSet:
+    if colours is None:
+        colours = []
+        for t in tuples:
+            for c in t:
+                if c not in colours:
+                    colours.append(c)
+    idx = {c: i for i, c in enumerate(colours)}
+    arr = np.array([[idx[c] for c in t] for t in tuples], dtype=np.int64).reshape(-1, 4)
+    return TileSet(name, tuple(colours), arr)
+
+
+def basic_set() -> TileSet:
+    """The basic 8-tile set B over P = {R, G, B, Y} (Dong 2007 Fig. 5.3(a))."""
+    return _from_tuples("B", BASIC_TILES, ["R", "G", "B", "Y"])
+
+
+def extend(ts: TileSet, reference: str, new: str, name: str) -> TileSet:
+    """The §5.3.2 extension rule: copies of the tiles holding ``reference`` with it replaced by ``new``,
+    plus, for each tile holding ``reference`` twice, the two tiles replacing only one of them."""
+    if reference not in ts.colours:
+        raise ValueError(f"reference colour {reference!r} not in the set {ts.colours}")
+    if new in ts.colours:
+        raise ValueError(f"new colour {new!r} already in the set")
+    out = ts.as_tuples()
+    seen = set(out)
+
+    def add(t):
+        if t not in seen:
+            seen.add(t)
+            out.append(t)
+
+    for t in ts.as_tuples():
+        pos = [i for i, c in enumerate(t) if c == reference]
+        if not pos:
+            continue
+        add(tuple(new if c == reference else c for c in t))
+        if len(pos) == 2:
+            for p in pos:
+                u = list(t)
+                u[p] = new
+                add(tuple(u))
+    return _from_tuples(name, out, list(ts.colours) + [new])
+
+
+def tile_set(name: str) -> TileSet:
+    """``'B'`` (8 tiles), ``'N1'`` (adds C) or ``'N2'`` (adds M), Dong 2007 §5.3."""
+    b = basic_set()
+    if name == "B":
+        return b
+    n1 = extend(b, "Y", "C", "N1")
+    if name == "N1":
+        return n1
+    if name == "N2":
+        return extend(n1, "R", "M", "N2")
+    raise ValueError(f"unknown tile set {name!r}; expected B, N1 or N2")
+
+
+# ------------------------------------------------------------------------------------ completability
+@dataclass(frozen=True)
+class Lookup:
+    """Candidate tiles per constraint: ``interior[(tl, tr, bl)]``, ``first_row[(tl, bl)]`` (TR free),
+    ``first_col[(tl, tr)]`` (BL free); values are arrays of tile indices."""
+
+    interior: dict
+    first_row: dict
+    first_col: dict
+
+
+def build_lookup(ts: TileSet) -> Lookup:
+    inter, row, col = {}, {}, {}
+    for k, (tl, tr, bl, _br) in enumerate(ts.tiles.tolist()):
+        inter.setdefault((tl, tr, bl), []).append(k)
+        row.setdefault((tl, bl), []).append(k)
+        col.setdefault((tl, tr), []).append(k)
+    f = lambda d: {key: np.array(v, np.int64) for key, v in d.items()}
+    return Lookup(f(inter), f(row), f(col))
+
+
+def dead_ends(ts: TileSet) -> list[str]:
+    """Constraints a scan-line tiling could meet with no tile to satisfy them (empty: completable).
+
+    Checked exhaustively over every local configuration, a sufficient condition for any size:
+    the tile right of any tile in the first row (its TL, BL given), the tile below any tile in the first
+    column (TL, TR given), and every interior position for every pair (left L, above T) of tiles that
+    agree on their shared vertex (L.TR == T.BL) -- a superset of the pairs that can really occur.
+    """
+    lk = build_lookup(ts)
+    tiles = ts.tiles.tolist()
+    c = ts.colours
+    out = []
+    for t in tiles:
+        if (t[1], t[3]) not in lk.first_row:
+            out.append(f"first row after <{','.join(c[x] for x in t)}>")
+        if (t[2], t[3]) not in lk.first_col:
+            out.append(f"first column below <{','.join(c[x] for x in t)}>")
+    for left, above in product(tiles, tiles):
+        if left[1] == above[2] and (above[2], above[3], left[3]) not in lk.interior:
+            out.append(f"interior: left <{','.join(c[x] for x in left)}>, above "
+                       f"<{','.join(c[x] for x in above)}>")
+    return out
+
+
+def is_completable(ts: TileSet) -> bool:
+    """True when a scan-line tiling of any size can always be completed with ``ts`` (§5.3.2)."""
+    return not dead_ends(ts)
