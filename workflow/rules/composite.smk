@@ -1,0 +1,44 @@
+# Stage: final hybrid RGB + spectral compositing (Dong 2007 Ch. 2; thin films §1.1.6)
+# Inputs are named per composite in config `composite.<name>`: background (e.g. the shot's cloud frames,
+# {product: shots/<shot>/frames/{frame:04d}.exr}), ground texture (tiles product), leaf/petal textures
+# (patterns products), thin-film objects.
+from natscene.composite.inputs import image_files as _composite_image_files
+
+
+def _composite_inputs(wc):
+    entry = config["composite"][wc.name]
+    frame = int(wc.frame)
+    files = _composite_image_files(entry["background"], frame, RESULTS, str(ROOT))
+    files += _composite_image_files(entry["ground"]["texture"], frame, RESULTS, str(ROOT))
+    for leaf in entry.get("leaves", []):
+        files += _composite_image_files(leaf["texture"], frame, RESULTS, str(ROOT))
+    if entry["sun"].get("sky_product"):
+        files.append(f"{RESULTS}/{entry['sun']['sky_product']}")
+    return files
+
+
+rule composite:
+    output:
+        hybrid=f"{RESULTS}/composite/{{name}}/{{frame}}/hybrid.exr",
+        final=f"{RESULTS}/composite/{{name}}/{{frame}}/final.exr",
+        png=report(f"{RESULTS}/composite/{{name}}/{{frame}}/final.png", category="Composite"),
+    input:
+        _composite_inputs,
+    wildcard_constraints:
+        frame=r"\d{4}",
+    params:
+        entry=lambda wc: config["composite"][wc.name],
+        results=RESULTS,
+        root=str(ROOT),
+        code=fingerprint("composite", "spectral", "io", "geometry", "color"),
+    log:
+        f"{RESULTS}/logs/composite/{{name}}.{{frame}}.log",
+    threads: 2
+    resources:
+        mem_mb=3000,
+    script:
+        str(ROOT / "scripts" / "composite.py")
+
+
+for _name, _entry in config["composite"].items():
+    ALL_TARGETS.extend(f"{RESULTS}/composite/{_name}/{f:04d}/final.png" for f in _entry["frames"])
