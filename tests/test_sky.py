@@ -205,3 +205,13 @@ def test_otsu_matches_skimage_within_a_bin():
     bin_width = np.ptp(v) / 256
     assert abs(otsu_threshold(v) - threshold_otsu(v)) <= bin_width
     assert ((v < otsu_threshold(v)) == (np.arange(v.size) < 5000)).mean() > 0.999
+
+
+def test_multigrid_matches_direct_solver():
+    photo = io.read_photo(KITE)[::2, ::2]
+    unknown = np.zeros(photo.shape[:2], bool)
+    unknown[20:200, 0:80] = True  # touches the border
+    unknown[30:60, 150:300] = True
+    mg = solve_laplace(photo, unknown, method="multigrid", rtol=1e-12)
+    lu = solve_laplace(photo, unknown, method="direct")
+    assert np.abs(mg - lu).max() < 1e-6

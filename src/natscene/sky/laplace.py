@@ -9,9 +9,11 @@ Discretisation: the 5-point Laplacian on the pixel grid. For every unknown pixel
 
 which is Pérez et al.'s Eq. (7) with v = 0. Neighbours outside the image are simply absent, which is the
 natural (zero-gradient, Neumann) boundary for clouds touching the image border. The matrix is symmetric
-positive definite whenever every connected unknown region touches at least one known pixel; it is
-factorised once with SuperLU (scipy.sparse.linalg.splu) and solved for all channels: an exact direct solve,
-not an approximate inpainting filter. Linear (and any discrete-harmonic) sky gradients are reproduced exactly.
+positive definite whenever every connected unknown region touches at least one known pixel. It is solved
+for all channels either by smoothed-aggregation multigrid preconditioned CG to a relative residual of 1e-9
+(``method="multigrid"``, the default: O(n), :mod:`natscene.sky.multigrid`) or by a SuperLU factorisation
+(``method="direct"``); both are exact solutions of the discrete system (to solver tolerance), not an
+approximate inpainting filter. Linear (and any discrete-harmonic) sky gradients are reproduced exactly.
 """
 from __future__ import annotations
 
@@ -20,6 +22,7 @@ import scipy.sparse as sp
 from scipy.sparse.linalg import splu
 
 from natscene.io import InputError
+from natscene.sky.multigrid import solve_pcg
 
 
 def laplace_system(unknown: np.ndarray, known_values: np.ndarray):
@@ -55,8 +58,11 @@ def laplace_system(unknown: np.ndarray, known_values: np.ndarray):
     return A, b, flat
 
 
-def solve_laplace(values: np.ndarray, unknown: np.ndarray) -> np.ndarray:
+def solve_laplace(values: np.ndarray, unknown: np.ndarray, method: str = "multigrid",
+                  rtol: float = 1e-9) -> np.ndarray:
     """Harmonic interpolation: ``values`` (H, W[, C]) kept where ``~unknown``, ∇²L = 0 solved where ``unknown``.
+
+    ``method``: "multigrid" (SA-multigrid PCG to relative residual ``rtol``) or "direct" (SuperLU).
 
     Raises InputError when no pixel is known (nothing to interpolate from).
     """
@@ -72,8 +78,12 @@ def solve_laplace(values: np.ndarray, unknown: np.ndarray) -> np.ndarray:
         raise InputError("no sky pixels: the sky behind the clouds cannot be interpolated; use a photo "
                          "showing some blue sky, or mark sky pixels in a hand-painted mask (black)")
     A, b, flat = laplace_system(unknown, v3)
-    lu = splu(A, permc_spec="MMD_AT_PLUS_A")
-    x = lu.solve(b)
+    if method == "direct":
+        x = splu(A, permc_spec="MMD_AT_PLUS_A").solve(b)
+    elif method == "multigrid":
+        x = solve_pcg(A, b, np.stack(np.divmod(flat, w), 1), rtol=rtol)
+    else:
+        raise ValueError(f"unknown Laplace solver method {method!r} (multigrid or direct)")
     out.reshape(h * w, nch)[flat] = x
     out = out.astype(np.float32)
     return out[..., 0] if squeeze else out
