@@ -132,7 +132,7 @@ def write_exr(path: str | os.PathLike, pixels: np.ndarray, channels: Sequence[st
     """Write an OpenEXR image atomically.
 
     ``pixels``: (H, W) or (H, W, C); ``channels``: C names (default R,G,B[,A]); ``attrs``: header
-    attributes (str/int/float stored natively, anything else as JSON), stored with the prefix
+    attributes (str/int stored natively, floats and anything else as JSON so doubles round-trip), stored with the prefix
     ``natscene:``; ``half`` stores 16-bit floats (use only where the error stays below 1e-3 relative).
     """
     a = _as_hwc(pixels)
@@ -146,12 +146,15 @@ def write_exr(path: str | os.PathLike, pixels: np.ndarray, channels: Sequence[st
     spec.channelnames = tuple(names)
     spec.attribute("compression", "zip")
     spec.attribute(ATTR_PREFIX + "version", __version__)
+    # OpenEXR stores channels sorted by name; remember the order they were given in.
+    spec.attribute(ATTR_PREFIX + "channel_order", ",".join(names))
     if stage:
         spec.attribute(ATTR_PREFIX + "stage", stage)
     for key, value in (attrs or {}).items():
         key = ATTR_PREFIX + str(key)
         value = to_builtin(value)
-        if isinstance(value, bool) or not isinstance(value, (str, int, float)):
+        # floats go through JSON too: an EXR float attribute is 32-bit and would not round-trip a double
+        if isinstance(value, (bool, float)) or not isinstance(value, (str, int)):
             spec.attribute(key, "json:" + json.dumps(value))
         elif isinstance(value, int) and not (-2**31 <= value < 2**31):
             spec.attribute(key, "json:" + json.dumps(value))
@@ -196,7 +199,14 @@ def read_exr(path: str | os.PathLike) -> Image:
             name = p.name[len(ATTR_PREFIX):] if p.name.startswith(ATTR_PREFIX) else p.name
             attrs[name] = _attr_value(p.value)
         pixels = np.asarray(pixels, np.float32).reshape(spec.height, spec.width, spec.nchannels)
-        return Image(pixels, list(spec.channelnames), attrs)
+        names = list(spec.channelnames)
+        order = attrs.pop("channel_order", None)
+        if order:
+            wanted = order.split(",")
+            if sorted(wanted) == sorted(names):
+                pixels = pixels[..., [names.index(n) for n in wanted]]
+                names = wanted
+        return Image(np.ascontiguousarray(pixels), names, attrs)
     finally:
         inp.close()
 

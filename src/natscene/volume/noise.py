@@ -79,15 +79,12 @@ def worley_f1(shape, extent, cells: float, rng: np.random.Generator, downsample:
     return ndimage.zoom(dist, zoom, order=1, grid_mode=True, mode="nearest")[: shape[0], : shape[1], : shape[2]]
 
 
-def radial_power_spectrum(field: np.ndarray, extent) -> tuple[np.ndarray, np.ndarray]:
-    """Radially averaged power spectrum of a 3-D field: (frequency in cycles per unit length, power)."""
+def radial_energy_spectrum(field: np.ndarray, extent) -> tuple[np.ndarray, np.ndarray]:
+    """Energy of a 3-D field per spherical frequency shell of width 1 cycle/unit: (shell centre, sum |F|^2)."""
     f = np.fft.fftn(field - field.mean())
     p = (np.abs(f) ** 2).ravel()
     freqs = [np.fft.fftfreq(n, d=e / n) for n, e in zip(field.shape, extent)]
     kz, ky, kx = np.meshgrid(*freqs, indexing="ij")
     k = np.sqrt(kx ** 2 + ky ** 2 + kz ** 2).ravel()
-    bins = np.arange(0.5, k.max(), 1.0)
-    which = np.digitize(k, bins)
-    power = np.bincount(which, p, minlength=len(bins) + 1) / np.maximum(np.bincount(which, minlength=len(bins) + 1), 1)
-    centres = np.concatenate([[0.0], (bins[:-1] + bins[1:]) / 2, [bins[-1] + 0.5]])
-    return centres[: len(power)], power
+    shell = np.round(k).astype(np.int64)
+    return np.arange(shell.max() + 1, dtype=np.float64), np.bincount(shell, p)

@@ -1,0 +1,48 @@
+"""Config validation: defaults filled from the schemas, errors naming the key path."""
+import copy
+from pathlib import Path
+
+import pytest
+
+from natscene.config import ConfigError, bundle_schema, load_yaml_config, validate_config
+
+ROOT = Path(__file__).resolve().parents[1]
+SCHEMA = ROOT / "workflow" / "schemas" / "config.schema.yaml"
+
+
+@pytest.fixture(scope="module")
+def smoke():
+    return load_yaml_config(ROOT / "config" / "smoke.yaml")
+
+
+@pytest.mark.parametrize("name", ["config.yaml", "smoke.yaml"])
+def test_bundled_configs_are_valid(name):
+    validate_config(load_yaml_config(ROOT / "config" / name), SCHEMA)
+
+
+def test_defaults_are_filled_inside_referenced_sections(smoke):
+    cfg = validate_config(copy.deepcopy(smoke), SCHEMA)
+    vol = cfg["volumes"]["tiny"]
+    assert vol["octaves"] == 5 and vol["size"] == 1.0 and vol["extinction_scale"] is None
+    assert cfg["views"]["tiny"]["camera"]["up"] == [0, 1, 0]
+
+
+def test_schema_bundle_has_no_refs():
+    assert "$ref" not in str(bundle_schema(SCHEMA))
+
+
+@pytest.mark.parametrize("mutate, key, words", [
+    (lambda c: c["volumes"]["tiny"].__setitem__("resoltion", [3, 3, 3]), "volumes.tiny", "resoltion"),
+    (lambda c: c["volumes"]["tiny"].__setitem__("resolution", [0, 8, 8]), "volumes.tiny.resolution[0]", "minimum"),
+    (lambda c: c["volumes"]["tiny"].__setitem__("resolution", [8, 2048, 8]), "volumes.tiny.resolution[1]", "maximum"),
+    (lambda c: c["volumes"]["tiny"].__setitem__("kind", "stratus"), "volumes.tiny.kind", "stratus"),
+    (lambda c: c.__setitem__("volumns", {}), "(top level)", "volumns"),
+    (lambda c: c["views"]["tiny"]["camera"].__setitem__("fov", 200), "views.tiny.camera.fov", "200"),
+])
+def test_bad_values_name_the_key(smoke, mutate, key, words):
+    cfg = copy.deepcopy(smoke)
+    mutate(cfg)
+    with pytest.raises(ConfigError) as e:
+        validate_config(cfg, SCHEMA, source="smoke.yaml")
+    msg = str(e.value)
+    assert f"'{key}'" in msg and words in msg and "smoke.yaml" in msg
