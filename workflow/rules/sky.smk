@@ -26,7 +26,7 @@ rule sky:
         photo=lambda wc: src(_photo(wc)["path"]),
         mask=lambda wc: [src(_photo(wc)["mask"])] if _photo(wc).get("mask") else [],
     params:
-        settings=lambda wc: {**config.get("sky", {}),
+        settings=lambda wc: {**{k: v for k, v in config.get("sky", {}).items() if k != "fit_resolutions"},
                              **({"threshold": _photo(wc)["threshold"]} if _photo(wc).get("threshold") is not None else {})},
         name=lambda wc: wc.photo,
         code=fingerprint("sky", "io", "color"),
