@@ -285,3 +285,18 @@ def test_atmosphere_blend_matches_scatter_contract():
     mine = prob.search.blend(cloud, kap)
     theirs = compose.apply_atmosphere(cloud[:, None], prob.search.t_c[None, :], kap, prob.search.sky.T[None])
     assert np.allclose(mine, np.asarray(theirs)[:, 0], rtol=1e-5, atol=1e-6)
+
+
+def test_real_compose_on_restricted_tables_equals_full_image():
+    compose = pytest.importorskip("natscene.scatter.compose")
+    tables_mod = pytest.importorskip("natscene.scatter.tables")
+    t = sphere_tables()
+    tab = tables_mod.Tables(t.sigma_t, t.g, t.orders, t.s_sun, t.s_amb, t.transmittance, t.multiple, t.t_c,
+                            t.cos_theta, t.footprint)
+    sky = sky_image()
+    prob = FitProblem(tab, sky, sky, tab.footprint > 0.5, C_IN)  # the real compose_cloud / apply_atmosphere
+    vals = np.array([TRUE, [2.0, 0.2, 0.3, 0.7, 0.5]])
+    full = prob.render(vals, np.zeros((2, 3)))
+    assert np.allclose(prob.cloud(vals), full[:, prob.footprint], rtol=1e-5, atol=1e-6)
+    mine = ref_compose_cloud(t, {"c_in": C_IN, **{k: vals[:, i] for i, k in enumerate(PARAMS)}}, sky)
+    assert np.allclose(full, mine, rtol=1e-4, atol=1e-5)  # the contract's Eq. 4 = this file's transcription

@@ -61,7 +61,8 @@ class FitProblem:
                  metric: str = "difference", kappas=None, compose_cloud=None, apply_atmosphere=None,
                  source: str = "fit"):
         if compose_cloud is None or apply_atmosphere is None:
-            from natscene.scatter import compose as _c
+            import importlib
+            _c = importlib.import_module("natscene.scatter.compose")
             compose_cloud = compose_cloud or _c.compose_cloud
             apply_atmosphere = apply_atmosphere or _c.apply_atmosphere
         self.compose_cloud, self.apply_atmosphere = compose_cloud, apply_atmosphere

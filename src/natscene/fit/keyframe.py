@@ -1,0 +1,106 @@
+"""One keyframe fit end to end (Dobashi et al. 2012, Fig. 2): photo products + tables -> ranked parameter sets.
+
+Reads nothing and writes nothing: the ``fit`` rule's script loads the inputs and writes what
+:func:`fit_keyframe` returns. The GA (or the §5.1 gradient baseline) runs over FitProblem's O; the top-k
+distinct sets are re-rendered as full images (Eq. 3 over Eq. 4) for the contact sheet.
+"""
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from natscene.fit.genetic import DEFAULT_RANGES, PARAMS, run_ga
+from natscene.fit.gradient import gradient_descent
+from natscene.fit.kappa import kappa_grid
+from natscene.fit.objective import Levels
+from natscene.fit.problem import FitProblem
+from natscene.io import InputError
+
+
+def effective_ranges(settings: dict, tables, log=None) -> dict:
+    """The configured ranges, with g and sigma_t clipped to the tables' grids (no data outside them)."""
+    ranges = {p: tuple(float(x) for x in settings.get("ranges", {}).get(p, DEFAULT_RANGES[p])) for p in PARAMS}
+    for p, (lo, hi) in ranges.items():
+        if hi < lo:
+            raise InputError(f"config key 'fit.ranges.{p}': max {hi} is below min {lo}")
+    for p, grid in (("g", tables.g), ("sigma_t", tables.sigma_t)):
+        lo, hi = ranges[p]
+        glo, ghi = float(np.min(grid)), float(np.max(grid))
+        if lo < glo or hi > ghi:
+            new = (max(lo, glo), min(hi, ghi))
+            if new[1] < new[0]:
+                raise InputError(f"config key 'fit.ranges.{p}': [{lo}, {hi}] lies outside the precomputed grid "
+                                 f"[{glo}, {ghi}]; widen the precompute grid or change the range")
+            if log:
+                log(f"fit.ranges.{p} [{lo:g}, {hi:g}] clipped to the precomputed grid [{new[0]:g}, {new[1]:g}]")
+            ranges[p] = new
+    return ranges
+
+
+def fit_keyframe(tables, photo, photo_cloud, sky, c_in, settings: dict, seed: int = 0, rank: int = 1,
+                 method: str | None = None, log=None, compose_cloud=None, apply_atmosphere=None) -> dict:
+    """Fit one keyframe. Returns {result, problem, ranges, images (k, H, W, 3), chosen, params (yaml dict)}."""
+    log = log or (lambda msg: None)
+    method = method or settings.get("method", "ga")
+    kap = settings.get("kappa", {})
+    if kap.get("max", 1.0) < kap.get("min", 0.0):
+        raise InputError("config key 'fit.kappa': max is below min")
+    levels = Levels(settings.get("n_levels", 256), settings.get("encoding", "srgb"))
+    problem = FitProblem(tables, sky, photo, photo_cloud, c_in, levels=levels,
+                         metric=settings.get("metric", "difference"),
+                         kappas=kappa_grid(kap.get("min", 0.0), kap.get("max", 1.0), kap.get("step", 0.1)),
+                         compose_cloud=compose_cloud, apply_atmosphere=apply_atmosphere)
+    ranges = effective_ranges(settings, tables, log)
+    log(f"{problem.n_pixels} synthetic cloud pixels, {int(np.asarray(photo_cloud).sum())} photo cloud pixels, "
+        f"method {method}")
+
+    def progress(it, best, mean):
+        if it % 10 == 0:
+            log(f"iteration {it:3d}: best O {best:.4f}, mean O {mean:.4f}")
+
+    t0 = time.perf_counter()
+    if method == "ga":
+        result = run_ga(problem, ranges, population=settings.get("population", 20), bits=settings.get("bits", 32),
+                        crossover_rate=settings.get("crossover_rate", 0.8),
+                        mutation_rate=settings.get("mutation_rate", 0.02),
+                        scaling=settings.get("scaling", "linear"), epsilon_o=settings.get("epsilon_O", 0.5),
+                        n_suc=settings.get("n_suc", 20), n_max=settings.get("n_max", 100),
+                        top_k=settings.get("top_k", 10), distinct_tol=settings.get("distinct_tol", 0.01),
+                        seed=seed, progress=progress)
+    elif method == "gradient":
+        gs = settings.get("gradient", {})
+        result = gradient_descent(problem, ranges, h=gs.get("h", 0.01), alpha0=gs.get("alpha0", 0.25),
+                                  n_alpha=gs.get("n_alpha", 10), max_iter=gs.get("max_iter", 100),
+                                  epsilon_o=settings.get("epsilon_O", 0.5), seed=seed, progress=progress)
+    else:
+        raise InputError(f"config key 'fit.method': unknown method {method!r} (ga or gradient)")
+    seconds = time.perf_counter() - t0
+    log(f"stopped after {result.iterations} iterations ({result.reason}), {result.evaluations} evaluations, "
+        f"{seconds:.2f} s; best O {result.best.objective:.4f}")
+    ranked = result.ranked
+    if rank > len(ranked):
+        raise InputError(f"keyframe rank {rank} but only {len(ranked)} distinct parameter sets were ranked; "
+                         f"choose a rank <= {len(ranked)} or raise fit.top_k")
+    vals = np.array([[c.values[p] for p in PARAMS] for c in ranked])
+    kappas = np.array([c.kappa for c in ranked])
+    images = problem.render(vals, kappas)
+
+    def entry(i, c):
+        return {"rank": i + 1, "O": float(c.objective), **{p: float(c.values[p]) for p in PARAMS},
+                "kappa_a": [float(k) for k in c.kappa], "iteration": int(c.iteration)}
+
+    chosen = entry(rank - 1, ranked[rank - 1])
+    params = {
+        "chosen": {**chosen, "c_in": [float(x) for x in np.asarray(c_in).reshape(3)]},
+        "ranked": [entry(i, c) for i, c in enumerate(ranked)],
+        "method": method, "seed": int(seed), "chosen_rank": int(rank),
+        "iterations": int(result.iterations), "evaluations": int(result.evaluations),
+        "termination": result.reason, "seconds": round(seconds, 3),
+        "ms_per_iteration": round(1000 * seconds / max(result.iterations + 1, 1), 3),
+        "objective": {"metric": problem.search.metric, "n_levels": levels.n_levels, "encoding": levels.encoding,
+                      "kappa_grid": problem.search.kappas.tolist()},
+        "ranges": {p: list(r) for p, r in ranges.items()},
+        "pixels": {"synthetic_cloud": problem.n_pixels, "photo_cloud": int(np.asarray(photo_cloud).sum())},
+    }
+    return {"result": result, "problem": problem, "ranges": ranges, "images": images, "params": params}

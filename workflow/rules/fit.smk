@@ -1,0 +1,59 @@
+# Stage: GA fitting of the cloud rendering parameters to a photograph (Dobashi 2012 §3, §4.2, §5, §5.1).
+# One job per keyframe (photo + volume + view): the sky products at the view's resolution, the sunlight
+# colour c_in and the precomputed tables in; ranked parameter sets, contact sheet and convergence out.
+
+wildcard_constraints:
+    keyframe="[^/]+",
+
+
+def _keyframe(wc):
+    kf = config["keyframes"][wc.keyframe]
+    for key, section in (("photo", "photos"), ("volume", "volumes"), ("view", "views")):
+        if kf[key] not in config.get(section, {}):
+            raise ValueError(f"config key 'keyframes.{wc.keyframe}.{key}': {kf[key]!r} is not in '{section}'")
+    return kf
+
+
+def _fit_sky(wc, name):
+    kf = _keyframe(wc)
+    w, h = config["views"][kf["view"]].get("resolution", [320, 240])
+    return f"{RESULTS}/sky/{kf['photo']}/{w}x{h}/{name}.exr"
+
+
+def _pre(wc, name):
+    kf = _keyframe(wc)
+    return f"{RESULTS}/precompute/{kf['volume']}/{kf['view']}/{name}"
+
+
+rule fit:
+    output:
+        params=f"{RESULTS}/fit/{{keyframe}}/params.yaml",
+        ranked=f"{RESULTS}/fit/{{keyframe}}/ranked.exr",
+        sheet=f"{RESULTS}/fit/{{keyframe}}/contact_sheet.png",
+        csv=f"{RESULTS}/fit/{{keyframe}}/convergence.csv",
+        plot=f"{RESULTS}/fit/{{keyframe}}/convergence.png",
+    input:
+        photo=lambda wc: _fit_sky(wc, "photo_linear"),
+        mask=lambda wc: _fit_sky(wc, "cloud_mask"),
+        sky=lambda wc: _fit_sky(wc, "sky"),
+        sun=lambda wc: f"{RESULTS}/sky/{_keyframe(wc)['photo']}/sun.yaml",
+        single=lambda wc: _pre(wc, "single.exr"),
+        multiple=lambda wc: _pre(wc, "multiple.exr"),
+        transmittance=lambda wc: _pre(wc, "transmittance.exr"),
+        geometry=lambda wc: _pre(wc, "geometry.exr"),
+        meta=lambda wc: _pre(wc, "meta.yaml"),
+    params:
+        name=lambda wc: wc.keyframe,
+        keyframe=lambda wc: _keyframe(wc),
+        settings=config.get("fit", {}),
+        code=fingerprint("fit", "scatter", "io", "color"),
+    log:
+        f"{RESULTS}/logs/fit/{{keyframe}}.log",
+    threads: 1
+    resources:
+        mem_mb=3000,
+    script:
+        script_path("fit.py")
+
+
+ALL_TARGETS.extend(expand(f"{RESULTS}/fit/{{keyframe}}/contact_sheet.png", keyframe=config.get("keyframes", {})))
