@@ -1,0 +1,35 @@
+"""Rule `precompute`: Dobashi 2012 §4.3 tables for one (volume, view)."""
+from pathlib import Path
+
+from natscene.geometry import Camera, sun_direction
+from natscene.io import write_png
+from natscene.runner import run
+
+
+def main(snakemake, log):
+    from natscene.scatter.contact import contact_sheet
+    from natscene.scatter.tables import precompute, save_tables
+    from natscene.variant import select_variant
+    from natscene.volume.grid import load_volume
+
+    cfg = snakemake.params.settings
+    view = snakemake.params.view
+    variant = select_variant(threads=snakemake.threads)
+    volume = load_volume(Path(snakemake.input.density).parent)
+    camera = Camera.from_view(view)
+    sun = sun_direction(view["sun"]["azimuth"], view["sun"]["elevation"])
+    log.info(f"precompute {snakemake.wildcards.volume} x {snakemake.wildcards.view}: {camera.width}x{camera.height}, "
+             f"{len(cfg['sigma_t'])} sigma_t x {len(cfg['g'])} g, n_m={cfg['n_m']}, {cfg['spp']} spp ({variant})")
+    tables = precompute(volume, camera, sun, sigmas=cfg["sigma_t"], gs=cfg["g"], n_m=cfg["n_m"], spp=cfg["spp"],
+                        seed=cfg["seed"], step_voxels=cfg["step_voxels"], supersample=cfg["supersample"],
+                        rho_threshold=cfg["rho_threshold"], batch_spp=cfg["batch_spp"], log=log.info)
+    out = Path(snakemake.output.meta).parent
+    meta = save_tables(out, tables, {"volume": snakemake.wildcards.volume, "view_name": snakemake.wildcards.view,
+                                     "view": view, "variant": variant})
+    write_png(snakemake.output.contact_sheet, contact_sheet(tables), encoded=True)
+    log.info(f"done in {meta['timings']['total_s']:.1f} s; tables {meta['memory_bytes'] / 1e6:.1f} MB in memory, "
+             f"{sum(meta['files_bytes'].values()) / 1e6:.1f} MB on disk; relative standard error "
+             f"{meta.get('relative_standard_error')}")
+
+
+run(snakemake, main)  # noqa: F821

@@ -1,0 +1,45 @@
+"""Contact sheet of the precomputed tables (Dobashi 2012 §4.3) for a person to look at.
+
+Rows: S_sun, S_amb, T at three sigma_t values; then one row per order k of E_m^(k) at a middle sigma_t for
+three g values. Every tile is tone-mapped on its own (auto exposure, :func:`natscene.io.to_srgb8`) and
+labelled, so the tile shows the pattern, not the absolute level.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from natscene.io import to_srgb8
+
+
+def _nearest(grid, x) -> int:
+    return int(np.argmin(np.abs(np.asarray(grid) - x)))
+
+
+def _label(tile: np.ndarray, text: str) -> np.ndarray:
+    import cv2
+    out = np.ascontiguousarray(tile)
+    scale = max(0.3, tile.shape[1] / 640)
+    cv2.putText(out, text, (3, int(14 * scale / 0.5)), cv2.FONT_HERSHEY_SIMPLEX, scale, (255, 255, 0), 1, cv2.LINE_AA)
+    return out
+
+
+def contact_sheet(tables, sigmas=(0.2, 0.5, 1.0), gs=(0.0, 0.5, 0.9)) -> np.ndarray:
+    """uint8 (rows*H, 3*W, 3) sheet."""
+    H, W = tables.t_c.shape
+    rows = []
+    for name, arr in (("S_sun", tables.s_sun), ("S_amb", tables.s_amb), ("T", tables.transmittance)):
+        tiles = []
+        for s in sigmas:
+            i = _nearest(tables.sigma_t, s)
+            exp = 1.0 if name == "T" else "auto"
+            tiles.append(_label(to_srgb8(arr[i], exp), f"{name} s={tables.sigma_t[i]:g}"))
+        rows.append(np.concatenate(tiles, axis=1))
+    si = _nearest(tables.sigma_t, 0.5)
+    for ki, k in enumerate(tables.orders):
+        tiles = []
+        for g in gs:
+            gi = _nearest(tables.g, g)
+            tiles.append(_label(to_srgb8(tables.multiple[ki, gi, si]),
+                                f"E{k} g={tables.g[gi]:g} s={tables.sigma_t[si]:g}"))
+        rows.append(np.concatenate(tiles, axis=1))
+    return np.concatenate(rows, axis=0)
