@@ -88,7 +88,7 @@ def fit_keyframe(tables, photo, photo_cloud, sky, c_in, settings: dict, seed: in
 
     def entry(i, c):
         return {"rank": i + 1, "O": float(c.objective), **{p: float(c.values[p]) for p in PARAMS},
-                "kappa_a": [float(k) for k in c.kappa], "iteration": int(c.iteration)}
+                "kappa_a": [round(float(k), 6) for k in c.kappa], "iteration": int(c.iteration)}
 
     chosen = entry(rank - 1, ranked[rank - 1])
     params = {

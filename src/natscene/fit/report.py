@@ -19,9 +19,9 @@ def _label(tile: np.ndarray, text: str) -> np.ndarray:
     import cv2
 
     h = tile.shape[0]
-    scale = max(0.3, h / 480.0)
-    thick = max(1, int(round(scale * 1.5)))
-    org = (4, int(14 * scale) + 4)
+    scale = max(0.8, h / 300.0)
+    thick = max(1, int(round(scale)))
+    org = (5, int(12 * scale) + 5)
     out = np.ascontiguousarray(tile)
     cv2.putText(out, text, org, cv2.FONT_HERSHEY_SIMPLEX, scale * 0.5, (0, 0, 0), thick + 2, cv2.LINE_AA)
     cv2.putText(out, text, org, cv2.FONT_HERSHEY_SIMPLEX, scale * 0.5, (255, 255, 255), thick, cv2.LINE_AA)
