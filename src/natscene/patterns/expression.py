@@ -1,0 +1,109 @@
+"""Flower colour expression of Dong 2007 §3.4 (Eqs. 3.6-3.10).
+
+Light L(lambda) (CIE illuminant, default D65, from colour-science), petal tissue transmittance T(lambda)
+and pigment absorption A(lambda) give the reflected spectrum R = L - T - A (§3.4.1). Precomputed:
+
+    X_0^(k)  = int (L - T) xbar_k dlambda                 (Eq. 3.8a)
+    X_Ai^(k) = int A_i xbar_k dlambda                      (Eq. 3.8b)
+
+with A_i the light absorbed at the standard concentration C_0 by Beer's law,
+A_i(lambda) = (L - T)(lambda) (1 - exp(-depth_i k_i(lambda))). At run time, for normalised
+concentrations c_i (Beer's law linearised, A_c = c A):
+
+    X^(k) = X_0^(k) - sum_i c_i X_Ai^(k)                    (Eq. 3.9)
+    V_c   = V_0 - sum_i c_i V_Ai       (V with v = ybar)    (Eq. 3.10)
+
+xbar_k are the CIE 1931 2-degree colour-matching functions (colour-science). Tristimulus values are
+normalised so that the illuminant itself has Y = 1, and converted to linear sRGB by natscene.color.
+
+Tissue transmittance T: the PROSPECT-D transmittance of a pigment-free petal layer (N = 1.2,
+water 0.005 cm, dry matter 0.002 g/cm^2), i.e. measured leaf-tissue optics standing in for the
+"typical plant tissue" data of [TSP00, SG02].
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import lru_cache
+
+import colour
+import numpy as np
+
+from natscene.color import xyz_to_linear_srgb
+from natscene.io import InputError
+from natscene.patterns.pigments import WAVELENGTHS, Pigment
+
+
+@lru_cache(maxsize=4)
+def cmfs_and_illuminant(illuminant: str = "D65"):
+    """(xbar, ybar, zbar) (N, 3) and the illuminant SPD (N,) on WAVELENGTHS, via colour-science."""
+    shape = colour.SpectralShape(WAVELENGTHS[0], WAVELENGTHS[-1], WAVELENGTHS[1] - WAVELENGTHS[0])
+    cmf = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"].copy().align(shape)
+    if illuminant not in colour.SDS_ILLUMINANTS:
+        raise InputError(f"unknown illuminant '{illuminant}'; use a colour-science name such as D65, D50, A")
+    ill = colour.SDS_ILLUMINANTS[illuminant].copy().align(shape)
+    return np.asarray(cmf.values, float), np.asarray(ill.values, float)
+
+
+@lru_cache(maxsize=4)
+def tissue_transmittance(n: float = 1.2, cw: float = 0.005, cm: float = 0.002) -> np.ndarray:
+    """PROSPECT-D transmittance of a pigment-free tissue layer on WAVELENGTHS."""
+    import prosail
+
+    wv, _, trans = prosail.run_prospect(n, 0.0, 0.0, 0.0, cw, cm, ant=0.0, prospect_version="D")
+    return np.interp(WAVELENGTHS, np.asarray(wv, float), np.asarray(trans, float))
+
+
+@dataclass
+class ColourTable:
+    """Precomputed Eq. 3.8 terms: X0 (3,), XA (n, 3) in XYZ with Y(illuminant) = 1."""
+
+    X0: np.ndarray
+    XA: np.ndarray
+    names: list
+
+    @property
+    def V0(self) -> float:
+        return float(self.X0[1])
+
+    @property
+    def VA(self) -> np.ndarray:
+        return self.XA[:, 1]
+
+
+def precompute(pigments: list[Pigment], illuminant: str = "D65", transmittance: np.ndarray | None = None,
+               base_reflectance: float = 1.0) -> ColourTable:
+    """Eq. 3.8 for each pigment. ``transmittance`` T(lambda)/L(lambda) as a fraction (default PROSPECT-D
+    tissue); ``base_reflectance`` scales L - T (1 = all non-transmitted light is reflected)."""
+    cmf, L = cmfs_and_illuminant(illuminant)
+    T = tissue_transmittance() if transmittance is None else np.broadcast_to(np.asarray(transmittance, float),
+                                                                            WAVELENGTHS.shape)
+    norm = float(L @ cmf[:, 1])
+    base = base_reflectance * L * (1.0 - T)  # L - T
+    X0 = base @ cmf / norm
+    XA = np.array([(base * (1.0 - np.exp(-p.depth * p.k))) @ cmf / norm for p in pigments]).reshape(-1, 3)
+    return ColourTable(X0, XA, [p.name for p in pigments])
+
+
+def express_xyz(table: ColourTable, conc: np.ndarray) -> np.ndarray:
+    """Eq. 3.9: XYZ for concentrations ``conc`` (..., n) (normalised c_i = C_i / C_0)."""
+    c = np.asarray(conc, float)
+    if c.shape[-1] != table.XA.shape[0]:
+        raise InputError(f"{c.shape[-1]} concentration maps for {table.XA.shape[0]} pigments")
+    return np.maximum(table.X0 - c @ table.XA, 0.0)
+
+
+def lightness(table: ColourTable, conc: np.ndarray) -> np.ndarray:
+    """Eq. 3.10: V_c = V_0 - sum_i c_i V_Ai."""
+    return table.V0 - np.asarray(conc, float) @ table.VA
+
+
+def express_rgb(table: ColourTable, conc: np.ndarray) -> np.ndarray:
+    """Linear sRGB (..., 3) of Eq. 3.9, clipped to >= 0 (out-of-gamut negatives)."""
+    return np.maximum(xyz_to_linear_srgb(express_xyz(table, conc)), 0.0).astype(np.float32)
+
+
+def chromaticity(xyz: np.ndarray) -> np.ndarray:
+    """CIE (x, y) of XYZ (..., 3)."""
+    xyz = np.asarray(xyz, float)
+    s = xyz.sum(axis=-1, keepdims=True)
+    return xyz[..., :2] / np.where(s > 0, s, 1.0)

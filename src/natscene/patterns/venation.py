@@ -1,0 +1,182 @@
+"""Petal shape and venation input of Dong 2007 §3.3.1.
+
+The shape is a black/white mask (petal = 1). The venation is "a set of vein nodes, including a vein root
+and vein width": here a tree of nodes in normalised image coordinates (x right, y down, both in [0, 1]),
+each with a relative width (1 = the main vein at the root) and a parent (-1 = the root). Edges are
+rasterised as lines whose pixel thickness is ``max(1, width * vein_px)``; every vascular pixel keeps its
+vein width ``w`` (used by the transport function, Eq. 3.1) and its path length to the root along the
+vein (``dist``, pixels; used for the non-adjacent vascular connections of Eq. 3.1c).
+
+A venation can also be extracted from a photograph (§3.5: "we ... extract the shape and venation
+information"): a multi-scale ridge filter (Sato tubeness, scikit-image) of luminance, a threshold at a
+percentile inside the petal, and skeletonisation; the vein width comes from the distance transform of
+the thresholded ridge mask.
+
+``parametric_petal`` draws a petal outline procedurally: in polar coordinates around the base,
+``r(phi) = L * sin(pi * s)^p * (1 + notch * cos(2 pi * lobes * s))`` with ``s`` the normalised opening
+angle, giving the rounded, slightly lobed shapes of Fig. 3.3 (petunia) and the daisy of Fig. 3.5.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import ndimage
+
+from natscene.io import InputError
+
+
+@dataclass
+class Venation:
+    """Vascular cells of a petal grid: mask (H, W) bool, width (H, W) float (0 off-vein),
+    dist (H, W) path length to the root along the veins (inf off-vein), root (row, col)."""
+
+    vascular: np.ndarray
+    width: np.ndarray
+    dist: np.ndarray
+    root: tuple[int, int]
+
+    @classmethod
+    def empty(cls, shape, root=(0, 0)) -> "Venation":
+        return cls(np.zeros(shape, bool), np.zeros(shape, np.float32), np.full(shape, np.inf, np.float32),
+                   tuple(int(v) for v in root))
+
+
+def parametric_petal(height: int, width: int, base=(0.5, 0.95), length: float = 0.9,
+                     opening_deg: float = 80.0, roundness: float = 0.6, lobes: int = 0,
+                     notch: float = 0.0) -> np.ndarray:
+    """A procedural petal mask (H, W) float32 in {0, 1}: polar outline around ``base`` (x, y normalised),
+    opening upward (toward y = 0); see module docstring for the outline function."""
+    yy, xx = np.mgrid[0:height, 0:width].astype(np.float64)
+    bx, by = base[0] * (width - 1), base[1] * (height - 1)
+    dx, dy = xx - bx, by - yy  # up is +dy
+    r = np.hypot(dx, dy)
+    phi = np.degrees(np.arctan2(dx, dy))  # 0 = straight up
+    half = opening_deg / 2.0
+    s = np.clip((phi + half) / opening_deg, 0.0, 1.0)
+    scale = length * min(height, width) if height < width else length * height
+    outline = scale * np.sin(np.pi * s) ** roundness * (1.0 + notch * np.cos(2 * np.pi * lobes * s))
+    inside = (np.abs(phi) <= half) & (r <= outline)
+    inside |= r <= 1.5  # the base pixel itself
+    return inside.astype(np.float32)
+
+
+def _draw_segment(shape, p0, p1, w0, w1, px):
+    """Pixels (rows, cols) and widths along a thick segment from p0 to p1 (pixel coords, (x, y))."""
+    h, w = shape
+    n = int(np.ceil(np.hypot(p1[0] - p0[0], p1[1] - p0[1]))) * 2 + 2
+    s = np.linspace(0.0, 1.0, n)
+    xs = p0[0] + (p1[0] - p0[0]) * s
+    ys = p0[1] + (p1[1] - p0[1]) * s
+    ws = w0 + (w1 - w0) * s
+    rows, cols, widths, along = [], [], [], []
+    seglen = float(np.hypot(p1[0] - p0[0], p1[1] - p0[1]))
+    rad = np.maximum(1.0, ws * px) / 2.0
+    rmax = int(np.ceil(rad.max()))
+    offs = np.arange(-rmax, rmax + 1)
+    ox, oy = np.meshgrid(offs, offs)
+    ox, oy = ox.ravel(), oy.ravel()
+    dd = np.hypot(ox, oy)
+    X = np.rint(xs[:, None] + ox[None]).astype(int)
+    Y = np.rint(ys[:, None] + oy[None]).astype(int)
+    keep = (dd[None] <= np.maximum(rad[:, None], 0.5)) & (X >= 0) & (X < w) & (Y >= 0) & (Y < h)
+    W = np.broadcast_to(ws[:, None], X.shape)
+    A = np.broadcast_to((s * seglen)[:, None], X.shape)
+    return Y[keep], X[keep], W[keep], A[keep]
+
+
+def venation_from_nodes(shape, spec: dict, vein_px: float = 3.0, key: str = "venation") -> Venation:
+    """Rasterise a vein tree ``{root: [x, y], root_width: w, nodes: [{xy: [x, y], width: w, parent: i}]}``
+    (normalised coordinates; ``parent`` -1 = the root) onto a grid of ``shape`` (H, W)."""
+    h, w = shape
+    try:
+        root = np.asarray(spec["root"], float)
+        nodes = spec.get("nodes", [])
+        root_w = float(spec.get("root_width", 1.0))
+    except (KeyError, TypeError) as e:
+        raise InputError(f"config key '{key}': needs 'root' [x, y] and 'nodes' ({e})") from None
+    pts = [root] + [np.asarray(n["xy"], float) for n in nodes]
+    wid = [root_w] + [float(n.get("width", 0.5)) for n in nodes]
+    par = [-2] + [int(n.get("parent", -1)) + 1 for n in nodes]  # index into pts
+    for i, p in enumerate(par[1:], start=1):
+        if not 0 <= p < len(pts) or p == i:
+            raise InputError(f"config key '{key}.nodes[{i - 1}].parent': {p - 1} is not a valid node index")
+    to_px = lambda q: np.array([q[0] * (w - 1), q[1] * (h - 1)])
+    # path length from the root to every node (pixels)
+    node_dist = np.zeros(len(pts))
+    order = sorted(range(1, len(pts)), key=lambda i: _depth(i, par))
+    for i in order:
+        node_dist[i] = node_dist[par[i]] + np.linalg.norm(to_px(pts[i]) - to_px(pts[par[i]]))
+    width = np.zeros(shape, np.float32)
+    dist = np.full(shape, np.inf, np.float32)
+    for i in range(1, len(pts)):
+        j = par[i]
+        r, c, ww, along = _draw_segment(shape, to_px(pts[j]), to_px(pts[i]), wid[j], wid[i], vein_px)
+        np.maximum.at(width, (r, c), ww.astype(np.float32))
+        np.minimum.at(dist, (r, c), (node_dist[j] + along).astype(np.float32))
+    rootpx = to_px(root)
+    root_rc = (int(np.clip(round(rootpx[1]), 0, h - 1)), int(np.clip(round(rootpx[0]), 0, w - 1)))
+    vas = width > 0
+    return Venation(vas, width, dist, root_rc)
+
+
+def _depth(i, par):
+    d = 0
+    while par[i] >= 1:
+        i = par[i]
+        d += 1
+    return d
+
+
+def radial_venation_spec(n_veins: int = 7, base=(0.5, 0.95), length: float = 0.85, opening_deg: float = 70.0,
+                         branch: bool = True, root_width: float = 1.0, tip_width: float = 0.3) -> dict:
+    """A fan of primary veins from the base (and one fork each), in the format of
+    :func:`venation_from_nodes`: the palmate/radial venation of a petunia petal."""
+    nodes = []
+    for k in range(n_veins):
+        a = np.radians(-opening_deg / 2 + opening_deg * (k + 0.5) / n_veins)
+        mid_r = length * 0.45
+        mid = [base[0] + mid_r * np.sin(a), base[1] - mid_r * np.cos(a)]
+        tip = [base[0] + length * np.sin(a) * 0.95, base[1] - length * np.cos(a) * 0.95]
+        nodes.append({"xy": mid, "width": 0.5 * (root_width + tip_width), "parent": -1})
+        mi = len(nodes) - 1
+        nodes.append({"xy": tip, "width": tip_width, "parent": mi})
+        if branch:
+            b = a + np.radians(opening_deg / n_veins / 2.5)
+            nodes.append({"xy": [mid[0] + 0.5 * length * np.sin(b), mid[1] - 0.5 * length * np.cos(b)],
+                          "width": tip_width * 0.8, "parent": mi})
+    return {"root": list(base), "root_width": root_width, "nodes": [
+        {"xy": [float(n["xy"][0]), float(n["xy"][1])], "width": float(n["width"]), "parent": n["parent"]}
+        for n in nodes]}
+
+
+def venation_from_photo(luminance: np.ndarray, mask: np.ndarray, root_xy=(0.5, 0.5), sigmas=(1.0, 2.0, 3.0),
+                        percentile: float = 90.0, bright_ridges: bool = True, min_size: int = 30) -> Venation:
+    """Extract veins from a photo's luminance: Sato ridge filter, percentile threshold inside ``mask``,
+    small-object removal, skeletonisation; widths from the distance transform (normalised to 1 at the
+    widest vein); path lengths measured along the skeleton from its pixel nearest to ``root_xy``."""
+    from skimage.filters import sato
+    from skimage.morphology import remove_small_objects, skeletonize
+
+    lum = np.asarray(luminance, np.float64)
+    inside = np.asarray(mask) > 0.5
+    if inside.sum() < 16:
+        raise InputError("venation_from_photo: the petal mask has fewer than 16 pixels; check the mask")
+    ridge = sato(np.log(lum + 1e-3), sigmas=sigmas, black_ridges=not bright_ridges)
+    ridge[~inside] = 0
+    thr = np.percentile(ridge[inside], percentile)
+    veins = remove_small_objects((ridge > thr) & inside, min_size=min_size)
+    skel = skeletonize(veins)
+    edt = ndimage.distance_transform_edt(veins)
+    width = np.where(skel, edt, 0.0)
+    if width.max() > 0:
+        width = width / width.max()
+    h, w = lum.shape
+    rr, cc = np.nonzero(skel)
+    rx, ry = root_xy[0] * (w - 1), root_xy[1] * (h - 1)
+    dist = np.full(lum.shape, np.inf, np.float32)
+    if rr.size:
+        # Euclidean distance to the root approximates the path length along the radial veins
+        dist[rr, cc] = np.hypot(cc - rx, rr - ry)
+    root = (int(round(ry)), int(round(rx)))
+    return Venation(skel.astype(bool), width.astype(np.float32), dist, root)

@@ -1,0 +1,22 @@
+# Stage: seasonal leaf colour (Dong 2007 Ch. 4): pigment concentrations from a climate series, PROSPECT-D colour
+
+rule leaf_season:
+    output:
+        leaves=expand(f"{RESULTS}/leaves/{config['leaves']['name']}/{{{{climate}}}}/{{date}}.exr",
+                      date=config["leaves"]["dates"]),
+        strip=f"{RESULTS}/leaves/{config['leaves']['name']}/{{climate}}/strip.png",
+        csv=f"{RESULTS}/leaves/{config['leaves']['name']}/{{climate}}/concentrations.csv",
+    params:
+        spec=config["leaves"],
+        case=lambda wc: config["leaves"]["cases"][wc.climate],
+        dates=config["leaves"]["dates"],
+        seed=config["seed"],
+        code=fingerprint("leaves", "patterns", "io", "color"),
+    log:
+        f"{RESULTS}/logs/leaf_season/{{climate}}.log",
+    script:
+        str(ROOT / "scripts" / "leaf_season.py")
+
+
+ALL_TARGETS.extend(expand(f"{RESULTS}/leaves/{config['leaves']['name']}/{{climate}}/strip.png",
+                          climate=config["leaves"]["cases"]))

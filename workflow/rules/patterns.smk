@@ -1,0 +1,54 @@
+# Stage: pigment pattern maps (Dong 2007 Ch. 3): reaction-diffusion maps, colour expression, photo recolouring
+
+rule pigment_maps:
+    output:
+        maps=[f"{RESULTS}/patterns/{{pattern}}/pigment_{p}.exr" for p in (0, 1)],
+        preview=f"{RESULTS}/patterns/{{pattern}}/maps.png",
+    params:
+        spec=lambda wc: config["patterns"][wc.pattern],
+        seed=config["seed"],
+        root=src,
+        code=fingerprint("patterns", "io"),
+    log:
+        f"{RESULTS}/logs/pigment_maps/{{pattern}}.log",
+    threads: 2
+    resources:
+        mem_mb=3000,
+    script:
+        str(ROOT / "scripts" / "pigment_maps.py")
+
+
+rule pattern_color:
+    input:
+        maps=[f"{RESULTS}/patterns/{{pattern}}/pigment_{p}.exr" for p in (0, 1)],
+    output:
+        color=f"{RESULTS}/patterns/{{pattern}}/color.exr",
+        preview=f"{RESULTS}/patterns/{{pattern}}/preview.png",
+    params:
+        spec=lambda wc: config["patterns"][wc.pattern],
+        code=fingerprint("patterns", "io", "color"),
+    log:
+        f"{RESULTS}/logs/pattern_color/{{pattern}}.log",
+    script:
+        str(ROOT / "scripts" / "pattern_color.py")
+
+
+rule recolour:
+    input:
+        photo=lambda wc: src(config["recolour"][wc.photo]["photo"]),
+    output:
+        exr=f"{RESULTS}/patterns/recolour/{{photo}}/recoloured.exr",
+        png=f"{RESULTS}/patterns/recolour/{{photo}}/recoloured.png",
+    params:
+        spec=lambda wc: config["recolour"][wc.photo],
+        seed=config["seed"],
+        code=fingerprint("patterns", "io", "color"),
+    log:
+        f"{RESULTS}/logs/recolour/{{photo}}.log",
+    threads: 2
+    script:
+        str(ROOT / "scripts" / "recolour.py")
+
+
+ALL_TARGETS.extend(expand(f"{RESULTS}/patterns/{{pattern}}/preview.png", pattern=config["patterns"]))
+ALL_TARGETS.extend(expand(f"{RESULTS}/patterns/recolour/{{photo}}/recoloured.png", photo=config["recolour"]))
