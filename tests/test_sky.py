@@ -215,3 +215,12 @@ def test_multigrid_matches_direct_solver():
     mg = solve_laplace(photo, unknown, method="multigrid", rtol=1e-12)
     lu = solve_laplace(photo, unknown, method="direct")
     assert np.abs(mg - lu).max() < 1e-6
+
+
+def test_greyscale_photo_with_fully_painted_mask_works():
+    photo, sky, m = synthetic_photo()
+    grey = photo.mean(-1, keepdims=True)
+    hand = np.where(m, CLOUD, SKY).astype(np.int8)
+    res = extract_sky(grey, hand_mask=hand)
+    assert np.array_equal(res.labels == CLOUD, m)
+    np.testing.assert_allclose(res.sun.c_in, 1.0, rtol=1e-5)

@@ -14,7 +14,7 @@ import numpy as np
 
 from natscene.io import InputError
 from natscene.sky.laplace import solve_laplace
-from natscene.sky.segmentation import CLOUD, NEITHER, SKY, check_colour_photo, classify, soft_alpha
+from natscene.sky.segmentation import AUTO, CLOUD, NEITHER, SKY, check_colour_photo, classify, soft_alpha
 from natscene.sky.sun_colour import SunColour, sun_colour
 
 
@@ -93,7 +93,11 @@ def extract_sky(photo: np.ndarray, settings: SkySettings | None = None,
                 hand_mask: np.ndarray | None = None, name: str = "photo") -> SkyResult:
     """Run §4.1 on a linear RGB photo (H, W, 3); ``hand_mask`` from :func:`decode_hand_mask` or None."""
     st = settings or SkySettings()
-    photo = check_colour_photo(photo, name)
+    if hand_mask is not None and not (np.asarray(hand_mask) == AUTO).any():
+        photo = np.asarray(photo, np.float32)  # fully painted: no chroma needed, a grey photo is fine
+        photo = np.repeat(photo, 3, -1) if photo.shape[-1] == 1 else photo
+    else:
+        photo = check_colour_photo(photo, name)
     try:
         labels, info = classify(photo, st.threshold, st.min_lightness, st.morphology_radius,
                                 st.min_region_fraction, hand_mask)

@@ -131,11 +131,13 @@ def classify(photo: np.ndarray, threshold: float | None = None, min_lightness: f
     Returns ``(labels uint8 (H, W), info)`` with info: threshold, threshold_source ('otsu' or 'config'),
     hand-mask pixel counts.
     """
-    photo = check_colour_photo(photo)
+    photo = np.asarray(photo, np.float32)
     h, w = photo.shape[:2]
     forced = np.full((h, w), AUTO, np.int8) if hand_mask is None else np.asarray(hand_mask, np.int8)
-    s, L = saturation(photo)
     auto = forced == AUTO
+    if auto.any():
+        photo = check_colour_photo(photo)
+    s, L = saturation(photo)
     if threshold is None:
         if not auto.any():
             t, source = float("nan"), "mask"
