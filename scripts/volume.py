@@ -3,7 +3,7 @@ from natscene.io import write_exr, write_png, write_yaml
 from natscene.runner import run
 from natscene.volume.build import build_volume
 from natscene.volume.grid import write_vol
-from natscene.volume.preview import optical_depth_projections, shade, side_by_side
+from natscene.volume.preview import lit_side_by_side, optical_depth_projections, side_by_side
 
 
 def main(snakemake, log):
@@ -19,7 +19,8 @@ def main(snakemake, log):
     write_exr(snakemake.output.preview_exr, tau, ["tau"], stage="volume",
               attrs={"volume": name, "layout": "front (along z) | top (along y), optical depth at sigma_t = 1",
                      "spec": spec})
-    write_png(snakemake.output.preview_png, shade(tau), exposure=1.0)
+    write_png(snakemake.output.preview_png, lit_side_by_side(vol.density, float(vol.voxel_size[0]), vol.extinction_scale),
+              exposure=1.0)
     write_yaml(snakemake.output.meta, {
         "volume": name, "kind": spec.get("kind"), "resolution": [nx, ny, nz],
         "bbox_min": vol.bbox_min, "bbox_max": vol.bbox_max, "voxel_size": float(vol.voxel_size[0]),
