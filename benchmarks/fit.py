@@ -81,12 +81,18 @@ def main():
     reps = 10
     t0 = time.perf_counter()
     for _ in range(reps):
-        cloud = prob.cloud(vals)
+        lc = prob.cloud(vals)
     compose_s = (time.perf_counter() - t0) / reps
     t0 = time.perf_counter()
     for _ in range(reps):
-        prob.search.search(cloud)
+        prob.search.search(lc)
     kappa_s = (time.perf_counter() - t0) / reps
+    from natscene.fit.kappa import KappaSearch
+    numpy_search = KappaSearch(prob.search.sky.T, prob.search.t_c, photo[cloud], backend="numpy")
+    t0 = time.perf_counter()
+    for _ in range(3):
+        numpy_search.search(lc)
+    kappa_numpy_s = (time.perf_counter() - t0) / 3
     from natscene.scatter.compose import compose_cloud
     params = {"c_in": c_in, **{p: vals[:, i] for i, p in enumerate(PARAMS)}}
     t0 = time.perf_counter()
@@ -122,6 +128,7 @@ def main():
         "ga_iteration_s": per_iter, "ga_iterations_timed": r.iterations + 1,
         "target_iteration_s": 0.05, "dobashi_gpu_iteration_s": 0.1,
         "components_s": {"compose_20_at_footprint": compose_s, "kappa_search_20x3x11": kappa_s,
+                         "kappa_search_backend": prob.search.backend, "kappa_search_numpy_backend": kappa_numpy_s,
                          "compose_20_full_image": compose_full_s},
         "fit_100_iterations_s_estimate": per_iter * 101,
     }

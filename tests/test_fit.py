@@ -300,3 +300,18 @@ def test_real_compose_on_restricted_tables_equals_full_image():
     assert np.allclose(prob.cloud(vals), full[:, prob.footprint], rtol=1e-5, atol=1e-6)
     mine = ref_compose_cloud(t, {"c_in": C_IN, **{k: vals[:, i] for i, k in enumerate(PARAMS)}}, sky)
     assert np.allclose(full, mine, rtol=1e-4, atol=1e-5)  # the contract's Eq. 4 = this file's transcription
+
+
+def test_numba_and_numpy_backends_count_identically():
+    from natscene.fit import kappa as kmod
+    if kmod._nb is None:
+        pytest.skip("numba not importable")
+    rng = np.random.default_rng(9)
+    n = 3000
+    sky = rng.random((n, 3)).astype(np.float32) * 0.6
+    t_c = rng.random(n).astype(np.float32) * 1.5
+    target = rng.random((500, 3)).astype(np.float32)
+    cloud = (rng.random((7, n, 3)) * 1.3).astype(np.float32)  # some values saturate above 1
+    a = KappaSearch(sky, t_c, target, backend="numpy").channel_distances(cloud)
+    b = KappaSearch(sky, t_c, target, backend="numba").channel_distances(cloud)
+    assert np.array_equal(a, b)
