@@ -1,49 +1,100 @@
 """Full-spectral reference mode (Dong 2007 §2.5: the comparison with Sun et al.'s full-spectrum framework
-[SFDC01]): the same set, the same rays, but every colour computation is done on spectra for every sample.
+[SFDC01], "which emphasizes real spectra as input, computes full spectra light-object interactions and
+generates spectral images convertible to RGB"): the same set and the same rays as the hybrid renderer, but
+every material, light and pixel is a spectrum on the wavelength grid (default 81 bands) and every
+light-material interaction is a per-band product, on every pixel and every bounce.
 
-RGB inputs (textures, the background plate, the sky dome) are upsampled once per sample with the same
-published method as the hybrid renderer (:mod:`natscene.spectral.upsampling`): reflectances with
-``rgb_to_reflectance``, radiances with ``rgb_to_radiance``; lights are spectra (the sun's SPD, the sky dome
-upsampled); each sample's radiance spectrum is integrated to XYZ -> linear sRGB only at the end.
+Preprocessing (once per render, timed with it): the RGB inputs become spectral inputs the way a spectral
+renderer's material database holds them, with the same published upsampling as the hybrid
+(:mod:`natscene.spectral.upsampling`): each texel of the ground and leaf textures becomes a reflectance
+spectrum (``rgb_to_reflectance``), each pixel of the background plate and the sky dome's zenith/horizon a
+radiance spectrum (``rgb_to_radiance``); the sun is its SPD. Rendering: textures are looked up as spectra
+(bilinear over 81 bands), shaded as ρ(λ)·(E_sun(λ) cosθ V / π + L_amb(λ) (1 + n_y)/2), film objects as
+R(θ_v, λ) L_env(λ) + R(θ_d, λ) E_sun(λ) lobe + highlight(λ) E_sun(λ) lobe with L_env the *spectral* radiance
+the mirror ray gathers; the pixel spectra are integrated to XYZ -> linear sRGB once at the end (§2.4).
+
+With the Mallett-Yuksel upsampling (linear, exact round trip under D65) the two modes agree exactly under a
+D65 sun and a neutral sky; under coloured light they differ on RGB materials, because a product of two
+upsampled spectra does not integrate to the product of the two RGB triples (Dong's hybrid, which shades RGB
+materials in RGB, has the same property).
 """
 from __future__ import annotations
 
+import time
+
 import numpy as np
 
-from natscene.composite.scene import SetRenderer, sky_ambient_rgb, stratified_offsets
-from natscene.spectral.grid import spectrum_to_rgb
+from natscene.composite.scene import SetRenderer, sky_ambient_weight, sky_blend
+from natscene.spectral.grid import spectrum_to_rgb_matrix
 from natscene.spectral.upsampling import rgb_to_radiance, rgb_to_reflectance
 
 
+class SpectralInputs:
+    """Per-texel / per-pixel spectra of the set's RGB inputs (the spectral renderer's preprocessing)."""
+
+    def __init__(self, r: SetRenderer):
+        spec = r.spec
+        g, up = spec.grid, spec.upsampling
+        self.ground = rgb_to_reflectance(r.ground_rgb, g, up).astype(np.float32)
+        self.leaves = [rgb_to_reflectance(t, g, up).astype(np.float32) for t in r.leaf_rgb]
+        self.plate = rgb_to_radiance(spec.background.reshape(-1, 3), g, up).astype(np.float32)
+        self.zenith = rgb_to_radiance(np.asarray(spec.sky_zenith, np.float64), g, up).astype(np.float32)
+        self.horizon = rgb_to_radiance(np.asarray(spec.sky_horizon, np.float64), g, up).astype(np.float32)
+        w = sky_ambient_weight()
+        self.ambient = (self.horizon * (1 - w) + self.zenith * w).astype(np.float32)
+        self.highlight = [rgb_to_reflectance(np.asarray(o.highlight_rgb, np.float64), g, up).astype(np.float32)
+                          for o in spec.objects]
+
+
+def _radiance(rho, sun_S, amb_S, sun_cos, ambient):
+    return rho * (sun_S[None] / np.float32(np.pi) * sun_cos[:, None] + amb_S[None] * ambient[:, None])
+
+
 def render_full_spectral(renderer: SetRenderer) -> tuple[np.ndarray, np.ndarray]:
-    """Spectral radiance image (H, W, N) and its linear sRGB (H, W, 3)."""
-    spec = renderer.spec
+    """Spectral radiance image (H, W, N) and its linear sRGB (H, W, 3). ``renderer.timing`` gets
+    ``preprocess`` (input spectra), ``geometry`` (shared ray casting) and ``shading`` seconds."""
+    r, spec = renderer, renderer.spec
     H, W, N = spec.camera.height, spec.camera.width, spec.grid.size
-    up = spec.upsampling
+    r.timing = {"geometry": 0.0, "shading": 0.0}
+    t_start = time.perf_counter()
+    inp = SpectralInputs(r)
+    r.timing["preprocess"] = time.perf_counter() - t_start
+    sun_S = r.sun_S
     S = np.zeros((H * W, N), np.float32)
-    sun_S = renderer.sun_S
-    amb_S = rgb_to_radiance(sky_ambient_rgb(spec), spec.grid, up)
-    offs = stratified_offsets(spec.spp)
-    for off in offs:
-        h = renderer.trace(off)
-        bg = h.kind < 0
-        S[bg] += rgb_to_radiance(h.plate[bg], spec.grid, up).astype(np.float32)
-        rm = (h.kind == 0) | (h.kind == 1)
-        if rm.any():
-            rho = rgb_to_reflectance(h.albedo[rm], spec.grid, up)
-            S[rm] += (rho * (sun_S[None] / np.pi * h.sun_cos[rm, None] + amb_S[None] * h.ambient[rm, None])).astype(np.float32)
+    spp = spec.spp
+    for sl, dirs in r.blocks(block_rays=max(spp, (1 << 24) // (4 * N))):  # (rays x N) float32 <= 16 MB
+        h = r.trace(dirs)
         fm = h.kind == 2
-        if fm.any():
-            _, refl, _, nh = renderer._film_geometry(h, fm)
-            s, _ = renderer.shade_film_spectral(h, fm, renderer.gather_mirror_rgb(h, fm, refl))
-            # the RGB highlight, as a spectrum: upsampled highlight reflectance x sun SPD x lobe
+        mh = r.mirror(h, fm) if fm.any() else None
+        n = sl.stop - sl.start
+        out = np.zeros((dirs.shape[0], N), np.float32)
+        bg = h.kind < 0
+        out[bg] = np.tile(inp.plate[sl], (spp, 1))[bg]
+        rm = (h.kind == 0) | (h.kind == 1)
+        rho = r.albedo(h.kind[rm], h.index[rm], h.uv[rm], inp.ground, inp.leaves)
+        out[rm] = _radiance(rho, sun_S, inp.ambient, h.sun_cos[rm], h.ambient[rm])
+        if mh is not None:
+            # spectral radiance gathered by the mirror rays: the sky dome's spectra or a spectral surface
+            t = sky_blend(mh.refl)
+            L_env = inp.horizon[None] * (1 - t) + inp.zenith[None] * t
+            surf = (mh.kind == 0) | (mh.kind == 1)
+            if surf.any():
+                rho2 = r.albedo(mh.kind[surf], mh.index[surf], mh.uv[surf], inp.ground, inp.leaves)
+                L_env[surf] = _radiance(rho2, sun_S, inp.ambient, mh.sun_cos[surf], mh.ambient[surf])
+            s = np.zeros((mh.cos_v.size, N), np.float32)
             idx = h.index[fm]
+            sun_cos = h.sun_cos[fm]
             for i, ob in enumerate(spec.objects):
                 k = idx == i
-                if k.any():
-                    lobe = (ob.gloss + 8) / (8 * np.pi) * nh[k] ** ob.gloss * h.sun_cos[fm][k]
-                    s[k] += rgb_to_reflectance(np.asarray(ob.highlight_rgb, np.float64), spec.grid, up)[None] * sun_S[None] * lobe[:, None]
-            S[fm] += s.astype(np.float32)
-    S /= len(offs)
-    S = S.reshape(H, W, N)
-    return S, spectrum_to_rgb(S, spec.grid).astype(np.float32)
+                if not k.any():
+                    continue
+                tab = r.tables[i]
+                lobe = r.lobe(ob, mh.nh[k], sun_cos[k])[:, None]
+                s[k] = (tab.reflectance(mh.cos_v[k]) * L_env[k] +
+                        (tab.reflectance(mh.cos_d[k]) + inp.highlight[i][None]) * (sun_S[None] * lobe))
+            out[fm] = s
+        S[sl] = out.reshape(spp, n, N).sum(0)
+    S *= np.float32(1.0 / spp)
+    rgb = (S @ spectrum_to_rgb_matrix(spec.grid).astype(np.float32)).reshape(H, W, 3)
+    r.timing["shading"] = time.perf_counter() - t_start - r.timing["geometry"] - r.timing["preprocess"]
+    return S.reshape(H, W, N), rgb

@@ -22,6 +22,7 @@ shades the same rays spectrally everywhere.
 from __future__ import annotations
 
 import logging
+import time
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -102,13 +103,19 @@ def _frame_matrix(center, size, yaw, tilt):
 
 
 class SetTracer:
-    """The Mitsuba scene of a set and ray queries returning numpy G-buffers."""
+    """The Mitsuba scene of a set and ray queries returning numpy G-buffers.
+
+    Each query is one fused Dr.Jit kernel: every field the shading needs (shape id, validity, position,
+    normal, uv) is evaluated together with ``dr.eval`` before it is copied to numpy (converting the lazy
+    fields one by one would relaunch the intersection kernel once per field).
+    """
 
     def __init__(self, spec: SetSpec):
         from natscene.variant import select_variant
         self.variant = select_variant(spectral=False)
+        import drjit as dr
         import mitsuba as mi
-        self.mi = mi
+        self.mi, self.dr = mi, dr
         T = mi.ScalarTransform4f
         d = {"type": "scene",
              "ground": {"type": "rectangle",
@@ -118,62 +125,77 @@ class SetTracer:
         for i, ob in enumerate(spec.objects):
             d[f"film{i:03d}"] = {"type": "sphere", "center": list(map(float, ob.center)), "radius": float(ob.radius)}
         self.scene = mi.load_dict(d)
-        self.names = [s.id() for s in self.scene.shapes()]
-        self.ptrs = list(self.scene.shapes())
+        shapes = list(self.scene.shapes())
+        self.names = [s.id() for s in shapes]
+        ids = [int(np.asarray(dr.reinterpret_array(mi.UInt32, mi.ShapePtr(s)))[0]) for s in shapes]
+        self._label_of_id = np.full(max(ids) + 1, -1, np.int64)
+        self._label_of_id[ids] = np.arange(len(shapes))
+
+    def _rays(self, origins: np.ndarray, dirs: np.ndarray):
+        mi = self.mi
+        o = np.ascontiguousarray(np.asarray(origins, np.float32).T)
+        v = np.ascontiguousarray(np.asarray(dirs, np.float32).T)
+        return mi.Ray3f(mi.Point3f(o[0], o[1], o[2]), mi.Vector3f(v[0], v[1], v[2]))
 
     def intersect(self, origins: np.ndarray, dirs: np.ndarray) -> dict:
-        """Closest hits of rays (M, 3): ``hit`` (M,) bool, ``label`` (M,) shape name index or -1, ``p``, ``n``
-        (geometric normal facing the ray origin), ``uv``."""
-        mi, dr = self.mi, __import__("drjit")
-        o = mi.Point3f(*[np.ascontiguousarray(origins[:, k], np.float32) for k in range(3)])
-        v = mi.Vector3f(*[np.ascontiguousarray(dirs[:, k], np.float32) for k in range(3)])
-        si = self.scene.ray_intersect(mi.Ray3f(o, v))
-        label = np.full(origins.shape[0], -1, np.int64)
-        for k, s in enumerate(self.ptrs):
-            label[np.asarray(si.shape == mi.ShapePtr(s), bool)] = k
-        valid = np.asarray(si.is_valid(), bool)
-        label[~valid] = -1
-        p = np.stack([np.asarray(si.p[k]) for k in range(3)], -1).astype(np.float64)
-        n = np.stack([np.asarray(si.n[k]) for k in range(3)], -1).astype(np.float64)
-        uv = np.stack([np.asarray(si.uv[k]) for k in range(2)], -1).astype(np.float64)
-        flip = np.sum(n * dirs, -1) > 0
+        """Closest hits of rays (M, 3): ``label`` (M,) shape index or -1, ``p``, ``n`` (geometric normal facing
+        the ray origin), ``uv`` (float32)."""
+        mi, dr = self.mi, self.dr
+        si = self.scene.ray_intersect(self._rays(origins, dirs))
+        sid = dr.reinterpret_array(mi.UInt32, si.shape)
+        valid = si.is_valid()
+        dr.eval(sid, valid, si.p, si.n, si.uv)
+        valid = np.asarray(valid, bool)
+        label = np.where(valid, self._label_of_id[np.minimum(np.asarray(sid, np.int64), self._label_of_id.size - 1)], -1)
+        p = np.asarray(si.p, np.float32).T.copy()
+        n = np.asarray(si.n, np.float32).T.copy()
+        uv = np.asarray(si.uv, np.float32).T.copy()
+        flip = np.einsum("ij,ij->i", n, np.asarray(dirs, np.float32)) > 0
         n[flip] *= -1
-        dr.eval()
-        return {"hit": valid, "label": label, "p": p, "n": n, "uv": uv}
+        return {"label": label, "p": p, "n": n, "uv": uv}
 
     def occluded(self, origins: np.ndarray, direction: np.ndarray) -> np.ndarray:
-        mi = self.mi
-        o = mi.Point3f(*[np.ascontiguousarray(origins[:, k], np.float32) for k in range(3)])
-        dd = np.broadcast_to(direction, origins.shape)
-        v = mi.Vector3f(*[np.ascontiguousarray(dd[:, k], np.float32) for k in range(3)])
-        return np.asarray(self.scene.ray_test(mi.Ray3f(o, v)), bool)
+        dd = np.broadcast_to(np.asarray(direction, np.float32), np.shape(origins))
+        hit = self.scene.ray_test(self._rays(origins, dd))
+        self.dr.eval(hit)
+        return np.asarray(hit, bool)
 
 
 # ------------------------------------------------------------------------------------ shading bits
 def sample_texture(tex: np.ndarray, uv: np.ndarray, repeat: float = 1.0) -> np.ndarray:
-    """Bilinear lookup with wrap-around, uv in [0,1]² (v up), (M, 2) -> (M, C)."""
+    """Bilinear lookup with wrap-around, uv in [0,1]² (v up), (M, 2) -> (M, C), in the texture's dtype."""
     h, w = tex.shape[:2]
     x = (uv[:, 0] * repeat) % 1.0 * w - 0.5
     y = (1.0 - (uv[:, 1] * repeat) % 1.0) * h - 0.5
     x0, y0 = np.floor(x).astype(np.int64), np.floor(y).astype(np.int64)
-    fx, fy = (x - x0)[:, None], (y - y0)[:, None]
+    fx, fy = (x - x0)[:, None].astype(tex.dtype), (y - y0)[:, None].astype(tex.dtype)
     x0m, x1m, y0m, y1m = x0 % w, (x0 + 1) % w, y0 % h, (y0 + 1) % h
     return ((tex[y0m, x0m] * (1 - fx) + tex[y0m, x1m] * fx) * (1 - fy) +
             (tex[y1m, x0m] * (1 - fx) + tex[y1m, x1m] * fx) * fy)
 
 
+def sky_blend(dirs: np.ndarray) -> np.ndarray:
+    """Zenith weight of the sky dome toward directions (M, 3): sqrt(max(y, 0)) (horizon 0, zenith 1)."""
+    return np.sqrt(np.clip(dirs[:, 1], 0.0, 1.0))[:, None].astype(np.float32)
+
+
 def sky_radiance_rgb(spec: SetSpec, dirs: np.ndarray) -> np.ndarray:
     """Sky dome radiance (RGB) toward directions (M, 3): horizon -> zenith blend in sqrt(max(y, 0))."""
-    t = np.sqrt(np.clip(dirs[:, 1], 0.0, 1.0))[:, None]
-    return spec.sky_horizon[None] * (1 - t) + spec.sky_zenith[None] * t
+    t = sky_blend(dirs)
+    return (spec.sky_horizon[None] * (1 - t) + spec.sky_zenith[None] * t).astype(np.float32)
+
+
+def sky_ambient_weight() -> float:
+    """Cosine-weighted mean of the zenith weight over the upper hemisphere: the dome's irradiance / π on a
+    horizontal plane is horizon·(1 - w) + zenith·w (midpoint rule, 256 steps in cos θ)."""
+    mu = np.linspace(0.0, 1.0, 257)[1:] - 0.5 / 256
+    return float((np.sqrt(mu) * mu).sum() / mu.sum())
 
 
 def sky_ambient_rgb(spec: SetSpec) -> np.ndarray:
     """Cosine-weighted mean sky radiance over the upper hemisphere (irradiance / π on a horizontal plane)."""
-    mu = np.linspace(0.0, 1.0, 257)[1:] - 0.5 / 256  # cos θ = y, weights cos θ d(cos θ)
-    d = np.stack([np.sqrt(1 - mu ** 2), mu, np.zeros_like(mu)], -1)
-    L = sky_radiance_rgb(spec, d)
-    return (L * mu[:, None]).sum(0) / mu.sum()
+    w = sky_ambient_weight()
+    return np.asarray(spec.sky_horizon, np.float64) * (1 - w) + np.asarray(spec.sky_zenith, np.float64) * w
 
 
 def stratified_offsets(spp: int) -> np.ndarray:
@@ -186,178 +208,237 @@ def stratified_offsets(spp: int) -> np.ndarray:
 
 @dataclass
 class Hits:
-    """Everything the shading of one sub-pixel sample set needs."""
+    """The geometry of one sub-pixel sample set (the same for the hybrid and the full-spectral shading)."""
 
-    dirs: np.ndarray
-    g: dict
+    dirs: np.ndarray  # (M, 3) float32
     kind: np.ndarray  # -1 background, 0 ground, 1 leaf, 2 film object
     index: np.ndarray  # leaf / object index
-    albedo: np.ndarray  # (M, 3) RGB albedo for ground/leaves
+    uv: np.ndarray  # (M, 2)
+    p: np.ndarray  # (M, 3)
+    n: np.ndarray  # (M, 3) facing the viewer
     sun_cos: np.ndarray  # (M,) n·l * visibility (0 where shadowed)
     ambient: np.ndarray  # (M,) (1 + n_y)/2
-    plate: np.ndarray  # (M, 3) background plate
+
+
+@dataclass
+class MirrorHits:
+    """Film samples: view/sun geometry and what their mirror rays hit."""
+
+    cos_v: np.ndarray  # (F,) incidence cosine of the view (= mirror) direction
+    cos_d: np.ndarray  # (F,) incidence cosine of the sun on the half vector
+    nh: np.ndarray  # (F,) n·h
+    refl: np.ndarray  # (F, 3) mirror directions
+    kind: np.ndarray  # (F,) what the mirror ray hits (-1 sky)
+    index: np.ndarray
+    uv: np.ndarray
+    sun_cos: np.ndarray  # (F,) at the mirror hit
+    ambient: np.ndarray  # (F,) at the mirror hit
 
 
 class SetRenderer:
-    """Builds rays, traces them, and shades samples in hybrid or full-spectral mode."""
+    """Builds rays, traces them (shared geometry), and shades samples in hybrid mode.
+
+    ``timing`` accumulates seconds spent in the shared geometry (``geometry``: camera, shadow and mirror rays
+    through Mitsuba, cut-outs) and in the mode's shading (``shading``), per render call.
+    """
 
     def __init__(self, spec: SetSpec):
         self.spec = spec
         self.tracer = SetTracer(spec)
         self.tables: list[FilmTable] = [film_table(o.layers, o.substrate, grid=spec.grid,
                                                    angle_step_deg=spec.angle_step_deg) for o in spec.objects]
-        self.sun_S = spec.sun_spectrum()
-        self.sun_rgb = spectrum_to_rgb(self.sun_S, spec.grid).astype(np.float64)  # §2.3.3 precomputed RGB
-        self.amb_rgb = sky_ambient_rgb(spec)
+        for t in self.tables:
+            t.R = t.R.astype(np.float32)
+        self.sun_S = spec.sun_spectrum().astype(np.float32)
+        # Dong §2.3.3: the RGB value of the spectral light, computed once in preprocessing
+        self.sun_rgb = spectrum_to_rgb(self.sun_S.astype(np.float64), spec.grid).astype(np.float32)
+        self.amb_rgb = sky_ambient_rgb(spec).astype(np.float32)
         names = self.tracer.names
         self.kind_of = np.array([0 if n == "ground" else 1 if n.startswith("leaf") else 2 for n in names])
         self.index_of = np.array([0 if n == "ground" else int(n[4:]) for n in names])
+        # RGB materials (clipped albedo textures) and leaf alpha (cut-outs)
+        self.ground_rgb = np.clip(spec.ground_texture[..., :3], 0, 1).astype(np.float32)
+        self.leaf_rgb = [np.clip(lf.texture[..., :3], 0, 1).astype(np.float32) for lf in spec.leaves]
+        self.leaf_alpha = [lf.texture[..., 3:4].astype(np.float32) if lf.texture.shape[-1] >= 4 else None
+                           for lf in spec.leaves]
+        self.timing = {"geometry": 0.0, "shading": 0.0}
 
     # -- geometry, shared by both modes
-    def trace(self, offset: np.ndarray) -> Hits:
-        spec, cam = self.spec, self.spec.camera
-        H, W = cam.height, cam.width
-        dirs = cam.ray_directions(jitter=np.broadcast_to(offset, (H, W, 2))).reshape(-1, 3)
-        org = np.broadcast_to(np.asarray(cam.position, np.float64), dirs.shape)
-        g = self.tracer.intersect(org, dirs)
-        kind = np.where(g["label"] >= 0, self.kind_of[np.maximum(g["label"], 0)], -1)
-        index = np.where(g["label"] >= 0, self.index_of[np.maximum(g["label"], 0)], 0)
-        # leaves: elliptical cut-out (and the texture's alpha if any); a cut-out sample continues
+    def _classify(self, label):
+        kind = np.where(label >= 0, self.kind_of[np.maximum(label, 0)], -1)
+        index = np.where(label >= 0, self.index_of[np.maximum(label, 0)], 0)
+        return kind, index
+
+    def _leaf_keep(self, index: np.ndarray, uv: np.ndarray) -> np.ndarray:
+        keep = ((uv[:, 0] - 0.5) ** 2 + (uv[:, 1] - 0.5) ** 2) <= 0.25  # elliptical cut-out
+        for i, a in enumerate(self.leaf_alpha):
+            if a is not None:
+                m = index == i
+                if m.any():
+                    keep[m] &= sample_texture(a, uv[m])[:, 0] > 0.5
+        return keep
+
+    def _surface_hits(self, origins, dirs):
+        """Closest hits skipping leaf cut-outs: kind, index, g-buffer."""
+        g = self.tracer.intersect(origins, dirs)
+        kind, index = self._classify(g["label"])
         for _ in range(4):
-            lf = kind == 1
-            if not lf.any():
+            lf = np.flatnonzero(kind == 1)
+            if lf.size == 0:
                 break
-            uv = g["uv"][lf]
-            keep = ((uv[:, 0] - 0.5) ** 2 + (uv[:, 1] - 0.5) ** 2 * 1.0) <= 0.25
-            keep &= self._leaf_alpha(index[lf], uv) > 0.5
+            keep = self._leaf_keep(index[lf], g["uv"][lf])
             if keep.all():
                 break
-            ids = np.flatnonzero(lf)[~keep]
+            ids = lf[~keep]
             g2 = self.tracer.intersect(g["p"][ids] + dirs[ids] * 1e-4, dirs[ids])
             for key in g:
                 g[key][ids] = g2[key]
-            kind[ids] = np.where(g2["label"] >= 0, self.kind_of[np.maximum(g2["label"], 0)], -1)
-            index[ids] = np.where(g2["label"] >= 0, self.index_of[np.maximum(g2["label"], 0)], 0)
-        M = dirs.shape[0]
-        albedo = np.zeros((M, 3))
-        gr = kind == 0
-        albedo[gr] = sample_texture(spec.ground_texture[..., :3], g["uv"][gr], spec.ground_repeat)
-        for i, lf in enumerate(spec.leaves):
-            m = (kind == 1) & (index == i)
-            if m.any():
-                albedo[m] = sample_texture(lf.texture[..., :3], g["uv"][m])
-        albedo = np.clip(albedo, 0.0, 1.0)
-        sun_cos = np.zeros(M)
-        surf = kind >= 0
-        if surf.any():
-            nl = np.clip(g["n"][surf] @ spec.sun_dir, 0.0, None)
-            lit = nl > 0
-            idx = np.flatnonzero(surf)[lit]
-            occ = self.tracer.occluded(g["p"][idx] + g["n"][idx] * 1e-4, spec.sun_dir)
-            nl_full = np.zeros(idx.size)
-            nl_full[~occ] = nl[lit][~occ]
-            sun_cos[idx] = nl_full
-        ambient = np.where(surf, 0.5 * (1 + g["n"][:, 1]), 0.0)
-        # background plate in screen space at this sample's pixel
-        plate = spec.background.reshape(-1, 3).astype(np.float64)
-        return Hits(dirs, g, kind, index, albedo, sun_cos, ambient, plate)
+            kind[ids], index[ids] = self._classify(g2["label"])
+        return kind, index, g
 
-    def _leaf_alpha(self, index: np.ndarray, uv: np.ndarray) -> np.ndarray:
-        out = np.ones(index.size)
-        for i, lf in enumerate(self.spec.leaves):
-            if lf.texture.shape[-1] >= 4:
-                m = index == i
-                if m.any():
-                    out[m] = sample_texture(lf.texture[..., 3:4], uv[m])[:, 0]
-        return out
+    def _sun_visibility(self, kind, p, n):
+        sun = self.spec.sun_dir.astype(np.float32)
+        sun_cos = np.zeros(kind.shape[0], np.float32)
+        surf = np.flatnonzero(kind >= 0)
+        if surf.size:
+            nl = np.clip(n[surf] @ sun, 0.0, None)
+            lit = surf[nl > 0]
+            occ = self.tracer.occluded(p[lit] + n[lit] * 1e-4, sun)
+            sun_cos[lit[~occ]] = np.clip(n[lit[~occ]] @ sun, 0.0, None)
+        return sun_cos
 
-    # -- RGB radiance of RGB materials (used directly, and as what a mirror ray "gathers")
-    def rgb_radiance(self, h: Hits, mask: np.ndarray) -> np.ndarray:
-        a = h.albedo[mask]
-        return (a / np.pi * self.sun_rgb[None] * h.sun_cos[mask, None] + a * self.amb_rgb[None] * h.ambient[mask, None])
+    def camera_rays(self) -> np.ndarray:
+        """Unit directions (spp, H·W, 3) of every sub-pixel sample (stratified offsets), float32."""
+        cam = self.spec.camera
+        H, W = cam.height, cam.width
+        return np.stack([cam.ray_directions(jitter=np.broadcast_to(off, (H, W, 2))).reshape(-1, 3)
+                         for off in stratified_offsets(self.spec.spp)]).astype(np.float32)
 
-    def _film_geometry(self, h: Hits, m: np.ndarray):
+    def blocks(self, block_rays: int = 1 << 18):
+        """Yield (pixel slice, directions (spp·n, 3) sample-major) over blocks of pixels, so that all samples of
+        a block go through Mitsuba in one kernel launch per query."""
+        dirs = self.camera_rays()
+        spp, P = dirs.shape[:2]
+        step = max(1, block_rays // spp)
+        for a in range(0, P, step):
+            b = min(P, a + step)
+            yield slice(a, b), dirs[:, a:b].reshape(-1, 3)
+
+    def trace(self, dirs: np.ndarray) -> Hits:
+        """Shared geometry of camera rays (M, 3): visible surface (leaf cut-outs skipped), sun visibility."""
+        t0 = time.perf_counter()
+        org = np.broadcast_to(np.asarray(self.spec.camera.position, np.float32), dirs.shape)
+        kind, index, g = self._surface_hits(org, dirs)
+        sun_cos = self._sun_visibility(kind, g["p"], g["n"])
+        ambient = np.where(kind >= 0, 0.5 * (1 + g["n"][:, 1]), 0.0).astype(np.float32)
+        self.timing["geometry"] += time.perf_counter() - t0
+        return Hits(dirs, kind, index, g["uv"], g["p"], g["n"], sun_cos, ambient)
+
+    def mirror(self, h: Hits, m: np.ndarray) -> MirrorHits:
+        """View/sun geometry of the film samples ``m`` and the hits of their mirror rays."""
+        t0 = time.perf_counter()
         v = -h.dirs[m]
-        n = h.g["n"][m]
-        cos_v = np.clip(np.sum(n * v, -1), 0.0, 1.0)
+        n = h.n[m]
+        cos_v = np.clip(np.einsum("ij,ij->i", n, v), 0.0, 1.0)
         refl = 2 * cos_v[:, None] * n - v
-        l = self.spec.sun_dir[None]
+        l = self.spec.sun_dir.astype(np.float32)[None]
         hv = l + v
         hv /= np.maximum(np.linalg.norm(hv, axis=-1, keepdims=True), 1e-12)
-        cos_d = np.clip(np.sum(hv * l, -1), 0.0, 1.0)
-        nh = np.clip(np.sum(n * hv, -1), 0.0, 1.0)
-        return cos_v, refl, cos_d, nh
+        cos_d = np.clip(np.einsum("ij,ij->i", hv, np.broadcast_to(l, hv.shape)), 0.0, 1.0)
+        nh = np.clip(np.einsum("ij,ij->i", n, hv), 0.0, 1.0)
+        kind2, index2, g2 = self._surface_hits(h.p[m] + n * 1e-4, refl)
+        sun2 = self._sun_visibility(np.where(kind2 == 2, -1, kind2), g2["p"], g2["n"])
+        amb2 = np.where(kind2 >= 0, 0.5 * (1 + g2["n"][:, 1]), 0.0).astype(np.float32)
+        self.timing["geometry"] += time.perf_counter() - t0
+        return MirrorHits(cos_v, cos_d, nh, refl, kind2, index2, g2["uv"], sun2, amb2)
 
-    def gather_mirror_rgb(self, h: Hits, m: np.ndarray, refl: np.ndarray) -> np.ndarray:
-        """RGB radiance arriving along the mirror rays of film samples (set geometry or sky dome)."""
-        p = h.g["p"][m] + h.g["n"][m] * 1e-4
-        g2 = self.tracer.intersect(p, refl)
-        kind2 = np.where(g2["label"] >= 0, self.kind_of[np.maximum(g2["label"], 0)], -1)
-        index2 = np.where(g2["label"] >= 0, self.index_of[np.maximum(g2["label"], 0)], 0)
-        out = sky_radiance_rgb(self.spec, refl)
-        surf = (kind2 == 0) | (kind2 == 1)
-        if surf.any():
-            alb = np.zeros((surf.sum(), 3))
-            gr = kind2[surf] == 0
-            uv = g2["uv"][surf]
-            alb[gr] = sample_texture(self.spec.ground_texture[..., :3], uv[gr], self.spec.ground_repeat)
-            for i, lf in enumerate(self.spec.leaves):
-                mm = (kind2[surf] == 1) & (index2[surf] == i)
-                if mm.any():
-                    alb[mm] = sample_texture(lf.texture[..., :3], uv[mm])
-            alb = np.clip(alb, 0, 1)
-            nrm = g2["n"][surf]
-            nl = np.clip(nrm @ self.spec.sun_dir, 0, None)
-            occ = self.tracer.occluded(g2["p"][surf] + nrm * 1e-4, self.spec.sun_dir)
-            nl[occ] = 0
-            out[surf] = alb / np.pi * self.sun_rgb[None] * nl[:, None] + alb * self.amb_rgb[None] * (0.5 * (1 + nrm[:, 1]))[:, None]
-        film = kind2 == 2  # film seen in a film: its colour as RGB highlight-free approximation (sky)
-        out[film] = sky_radiance_rgb(self.spec, refl[film])
+    # -- materials
+    def albedo(self, kind, index, uv, ground, leaves) -> np.ndarray:
+        """Albedo of ground/leaf samples from per-texel tables (RGB here, spectra in the full mode)."""
+        out = np.zeros((kind.shape[0], ground.shape[-1]), np.float32)
+        gr = kind == 0
+        if gr.any():
+            out[gr] = sample_texture(ground, uv[gr], self.spec.ground_repeat)
+        for i, tex in enumerate(leaves):
+            k = (kind == 1) & (index == i)
+            if k.any():
+                out[k] = sample_texture(tex, uv[k])
         return out
 
-    def shade_film_spectral(self, h: Hits, m: np.ndarray, mirror_rgb: np.ndarray):
-        """Spectral radiance (M_f, N) of film samples and their RGB highlight part (M_f, 3)."""
+    def lobe(self, ob: FilmObject, nh: np.ndarray, sun_cos: np.ndarray) -> np.ndarray:
+        """Normalised Blinn-Phong sun lobe (e+8)/(8π) (n·h)^e cosθ V."""
+        return ((ob.gloss + 8) / (8 * np.pi) * nh ** ob.gloss * sun_cos).astype(np.float32)
+
+    # -- RGB radiance of RGB materials (what a camera ray or a mirror ray gathers)
+    def rgb_radiance(self, albedo, sun_cos, ambient) -> np.ndarray:
+        return albedo * (self.sun_rgb[None] / np.float32(np.pi) * sun_cos[:, None] + self.amb_rgb[None] * ambient[:, None])
+
+    def gather_mirror_rgb(self, mh: MirrorHits) -> np.ndarray:
+        """RGB radiance arriving along the mirror rays of film samples (set geometry or sky dome; a film seen in a
+        film shows the sky behind it, both modes)."""
+        out = sky_radiance_rgb(self.spec, mh.refl)
+        surf = (mh.kind == 0) | (mh.kind == 1)
+        if surf.any():
+            a = self.albedo(mh.kind[surf], mh.index[surf], mh.uv[surf], self.ground_rgb, self.leaf_rgb)
+            out[surf] = self.rgb_radiance(a, mh.sun_cos[surf], mh.ambient[surf])
+        return out
+
+    def shade_film_hybrid(self, h: Hits, fm: np.ndarray, mh: MirrorHits):
+        """Spectral radiance (F, N) of film samples and their RGB highlight part (F, 3) (Fig. 2.3(b)): the RGB
+        radiance the mirror ray gathers is upsampled to a spectrum, the sun's SPD is used as is."""
         spec = self.spec
-        cos_v, refl, cos_d, nh = self._film_geometry(h, m)
-        S = np.zeros((m.sum(), spec.grid.size))
-        rgb = np.zeros((m.sum(), 3))
-        idx = h.index[m]
-        sun_cos = h.sun_cos[m]
-        L_env = rgb_to_radiance(mirror_rgb, spec.grid, spec.upsampling)  # RGB -> spectrum (Fig. 2.3(b))
+        L_env = rgb_to_radiance(self.gather_mirror_rgb(mh), spec.grid, spec.upsampling).astype(np.float32)
+        S = np.zeros((mh.cos_v.size, spec.grid.size), np.float32)
+        rgb = np.zeros((mh.cos_v.size, 3), np.float32)
+        idx = h.index[fm]
+        sun_cos = h.sun_cos[fm]
         for i, ob in enumerate(spec.objects):
             k = idx == i
             if not k.any():
                 continue
             tab = self.tables[i]
-            lobe = (ob.gloss + 8) / (8 * np.pi) * nh[k] ** ob.gloss * sun_cos[k]
-            S[k] = tab.reflectance(cos_v[k]) * L_env[k] + tab.reflectance(cos_d[k]) * (self.sun_S[None] * lobe[:, None])
-            rgb[k] = np.asarray(ob.highlight_rgb)[None] * self.sun_rgb[None] * lobe[:, None]
+            lobe = self.lobe(ob, mh.nh[k], sun_cos[k])
+            S[k] = tab.reflectance(mh.cos_v[k]) * L_env[k] + tab.reflectance(mh.cos_d[k]) * (self.sun_S[None] * lobe[:, None])
+            rgb[k] = np.asarray(ob.highlight_rgb, np.float32)[None] * self.sun_rgb[None] * lobe[:, None]
         return S, rgb
 
     # -- the hybrid render
     def render_hybrid(self) -> HybridImage:
+        """Dong §2.3-2.4: RGB part for RGB materials, spectral part only on the film objects' samples."""
         spec = self.spec
         H, W, N = spec.camera.height, spec.camera.width, spec.grid.size
-        rgb = np.zeros((H * W, 3))
+        self.timing = {"geometry": 0.0, "shading": 0.0}
+        t_start = time.perf_counter()
+        spp = spec.spp
+        rgb = np.zeros((H * W, 3), np.float32)
         S = np.zeros((H * W, N), np.float32)
-        A = np.zeros(H * W)
-        offs = stratified_offsets(spec.spp)
-        for off in offs:
-            h = self.trace(off)
-            bg = h.kind < 0
-            rgb[bg] += h.plate[bg]
-            rm = (h.kind == 0) | (h.kind == 1)
-            rgb[rm] += self.rgb_radiance(h, rm)
+        A = np.zeros(H * W, np.float32)
+        plate = spec.background.reshape(-1, 3).astype(np.float32)
+        for sl, dirs in self.blocks():
+            h = self.trace(dirs)
             fm = h.kind == 2
-            if fm.any():
-                _, refl, _, _ = self._film_geometry(h, fm)
-                s, r = self.shade_film_spectral(h, fm, self.gather_mirror_rgb(h, fm, refl))
-                S[fm] += s.astype(np.float32)
-                rgb[fm] += r
-            A += ~bg
-        n = len(offs)
-        return HybridImage((rgb / n).reshape(H, W, 3).astype(np.float32), (S / n).reshape(H, W, N),
-                           (A / n).reshape(H, W).astype(np.float32), spec.grid)
+            mh = self.mirror(h, fm) if fm.any() else None
+            n = sl.stop - sl.start
+            out = np.zeros((dirs.shape[0], 3), np.float32)
+            bg = h.kind < 0
+            out[bg] = np.tile(plate[sl], (spp, 1))[bg]
+            rm = (h.kind == 0) | (h.kind == 1)
+            a = self.albedo(h.kind[rm], h.index[rm], h.uv[rm], self.ground_rgb, self.leaf_rgb)
+            out[rm] = self.rgb_radiance(a, h.sun_cos[rm], h.ambient[rm])
+            if mh is not None:
+                s, r = self.shade_film_hybrid(h, fm, mh)
+                out[fm] = r
+                # scatter the film samples' spectra into their pixels (one sample per pixel per pass)
+                ray = np.flatnonzero(fm)
+                for j in range(spp):
+                    k = (ray >= j * n) & (ray < (j + 1) * n)
+                    S[sl.start + ray[k] - j * n] += s[k]
+            rgb[sl] = out.reshape(spp, n, 3).sum(0)
+            A[sl] = (~bg).reshape(spp, n).sum(0)
+        w = np.float32(1.0 / spp)
+        out = HybridImage((rgb * w).reshape(H, W, 3), (S * w).reshape(H, W, N), (A * w).reshape(H, W), spec.grid)
+        self.timing["shading"] = time.perf_counter() - t_start - self.timing["geometry"]
+        return out
 
 
 def spectral_coverage(hybrid: HybridImage) -> float:

@@ -55,14 +55,23 @@ def complex_index(material, wavelengths_nm) -> np.ndarray:
     """n + iκ at the wavelengths (nm).
 
     ``material``: a name of a Mitsuba table (``"Au"``, ``"Cu"``, ``"Cu_palik"``, ...), ``"air"``/``"vacuum"``
-    (1.0), a real number (non-absorbing dielectric) or a complex number.
+    (1.0), a real number (non-absorbing dielectric), a complex number, or a string holding one in Python
+    notation (``"2.0+0.05j"``: n = 2.0, κ = 0.05; constant over wavelength).
     """
     wl = np.asarray(wavelengths_nm, np.float64)
     if isinstance(material, (int, float, complex, np.number)):
         return np.full(wl.shape, complex(material), np.complex128)
-    name = str(material)
+    name = str(material).strip()
     if name.lower() in ("air", "vacuum"):
         return np.ones(wl.shape, np.complex128)
+    try:
+        value = complex(name.replace(" ", ""))
+    except ValueError:
+        value = None
+    if value is not None:
+        if value.real <= 0 or value.imag < 0:
+            raise InputError(f"index {name!r}: need n > 0 and kappa >= 0 (n + kappa j)")
+        return np.full(wl.shape, value, np.complex128)
     w, n, k = _table(name)
     if wl.min() < w[0] - 1e-6 or wl.max() > w[-1] + 1e-6:
         raise InputError(f"index table {name!r} covers {w[0]:.0f}-{w[-1]:.0f} nm, asked {wl.min():.0f}-{wl.max():.0f} nm")

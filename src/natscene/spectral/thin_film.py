@@ -80,10 +80,10 @@ def multilayer(indices, thicknesses_nm, wavelengths_nm, theta0_rad) -> dict:
         out[f"R_{pol}"] = np.abs(gamma) ** 2
         sub = n[last]
         if np.all(sub.imag == 0):
-            ratio = (q[last].real) / (q[0].real)
-            if pol == "p":  # energy factor with E-field amplitudes: same n cos θ ratio for both
-                ratio = ratio
-            out[f"T_{pol}"] = np.where(q[0].real > 0, ratio * np.abs(tau) ** 2, 0.0)
+            with np.errstate(divide="ignore", invalid="ignore"):  # grazing incidence: q_0 = 0, T = 0
+                ratio = (q[last].real) / (q[0].real)
+            with np.errstate(invalid="ignore"):
+                out[f"T_{pol}"] = np.where(q[0].real > 0, ratio * np.abs(tau) ** 2, 0.0)
         else:
             out[f"T_{pol}"] = np.zeros_like(out[f"R_{pol}"])
     out["R"] = 0.5 * (out["R_p"] + out["R_s"])  # Eq. 1.24
@@ -106,7 +106,7 @@ class FilmTable:
         ang = np.degrees(np.arccos(c))
         x = np.interp(ang, self.angles_deg, np.arange(self.angles_deg.size, dtype=np.float64))
         i0 = np.clip(np.floor(x).astype(np.int64), 0, self.angles_deg.size - 2)
-        f = (x - i0)[..., None]
+        f = (x - i0)[..., None].astype(self.R.dtype)
         return (self.R[i0] * (1 - f) + self.R[i0 + 1] * f)
 
 
