@@ -97,11 +97,8 @@ def compose_cloud(tables, params: dict, sky) -> np.ndarray:
     if K:
         bk = p["beta"][:, None] ** np.asarray(tables.orders, np.float64)[None, :]          # (P, K)
         wm = (bk[:, :, None, None] * wg[:, None, :, None] * ws[:, None, None, :]).astype(np.float32)
-        wm = wm.reshape(P, -1)
-        cols = np.flatnonzero(np.any(wm != 0, axis=0))
-        if cols.size:
-            m = tables.multiple.reshape(K * Ng * Ns, -1)
-            A += L_in * (wm[:, cols] @ m[cols])
+        # one dense (P x K·Ng·Ns) @ (K·Ng·Ns x H·W) product: no gathers/copies of the big table
+        A += L_in * (wm.reshape(P, -1) @ tables.multiple.reshape(K * Ng * Ns, -1))
     out = A[:, :, None] * p["c_in"].astype(np.float32)[:, None, :]
     out += T[:, :, None] * sky.reshape(1, -1, 3)
     return out.reshape(P, H, W, 3)
