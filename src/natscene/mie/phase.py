@@ -41,10 +41,13 @@ def water_index(wavelength_nm) -> np.ndarray:
 
 
 def gamma_size_distribution(r_um, r_eff_um: float = 10.0, v_eff: float = 0.1) -> np.ndarray:
-    """Hansen's gamma droplet size distribution n(r) (unnormalised), r in µm."""
+    """Hansen's gamma droplet size distribution n(r) (scaled to max 1), r in µm."""
     r = np.asarray(r_um, np.float64)
     alpha = (1.0 - 3.0 * v_eff) / v_eff
-    return np.where(r > 0, r**alpha * np.exp(-r / (r_eff_um * v_eff)), 0.0)
+    with np.errstate(divide="ignore"):
+        logn = alpha * np.log(np.where(r > 0, r, 1.0)) - r / (r_eff_um * v_eff)
+    logn = np.where(r > 0, logn, -np.inf)
+    return np.exp(logn - np.max(logn))  # in log space: r^alpha overflows for narrow distributions
 
 
 def radius_grid(r_eff_um: float, v_eff: float, n: int) -> np.ndarray:
@@ -190,10 +193,16 @@ def hg_table(g: float, theta_deg: np.ndarray | None = None) -> PhaseTable:
 
 
 def fogbow_peak_deg(table: PhaseTable, lo: float = 125.0, hi: float = 165.0) -> np.ndarray:
-    """Scattering angle (deg) of the maximum of each RGB channel between ``lo`` and ``hi``."""
+    """Scattering angle (deg) of the fogbow maximum of each RGB channel between ``lo`` and ``hi``: the
+    centroid of the part of the bow above 90 % of its maximum (robust to the residual Mie ripple)."""
     d = table.theta_deg
     sel = (d >= lo) & (d <= hi)
-    return d[sel][np.argmax(table.rgb[sel], axis=0)]
+    out = []
+    for c in range(3):
+        p = table.rgb[sel, c]
+        top = p >= 0.9 * p.max()
+        out.append(float(np.sum(d[sel][top] * p[top]) / np.sum(p[top])))
+    return np.array(out)
 
 
 def glory_ring_deg(table: PhaseTable, lo: float = 170.0) -> np.ndarray:
