@@ -21,6 +21,7 @@ class HybridImage:
     spectral: np.ndarray  # (H, W, N) spectral radiance part
     alpha: np.ndarray  # (H, W) coverage of the set's geometry (0 where the background plate shows)
     grid: WavelengthGrid = DEFAULT_GRID
+    mask: np.ndarray | None = None  # (H, W) bool: pixels whose spectral part may be non-zero (None: any)
 
     def channel_names(self) -> list[str]:
         return ["R", "G", "B"] + self.grid.channel_names("S") + ["A"]
@@ -38,11 +39,16 @@ class HybridImage:
             grid = WavelengthGrid(float(wl[0]), float(wl[-1]), step)
         idx = [channels.index(c) for c in ("R", "G", "B")]
         sidx = [channels.index(c) for c in s_names]
-        return cls(pixels[..., idx], pixels[..., sidx], pixels[..., channels.index("A")], grid)
+        spectral = pixels[..., sidx]
+        return cls(pixels[..., idx], spectral, pixels[..., channels.index("A")], grid, np.any(spectral != 0, -1))
 
     def final(self) -> np.ndarray:
-        """RGB + M_XYZ->sRGB κ ∫ S x̄ dλ, (H, W, 3) float32."""
-        return final_rgb(self.rgb, self.spectral, self.grid)
+        """RGB + M_XYZ->sRGB κ ∫ S x̄ dλ, (H, W, 3) float32 (the integral only where the spectral part lives)."""
+        if self.mask is None:
+            return final_rgb(self.rgb, self.spectral, self.grid)
+        out = np.array(self.rgb, np.float32)
+        out[self.mask] = final_rgb(out[self.mask], self.spectral[self.mask], self.grid)
+        return out
 
 
 def final_rgb(rgb: np.ndarray, spectral: np.ndarray, grid: WavelengthGrid = DEFAULT_GRID) -> np.ndarray:

@@ -163,15 +163,25 @@ class SetTracer:
 
 # ------------------------------------------------------------------------------------ shading bits
 def sample_texture(tex: np.ndarray, uv: np.ndarray, repeat: float = 1.0) -> np.ndarray:
-    """Bilinear lookup with wrap-around, uv in [0,1]² (v up), (M, 2) -> (M, C), in the texture's dtype."""
+    """Bilinear lookup with wrap-around, uv in [0,1]² (v up), (M, 2) -> (M, C), in the texture's dtype.
+
+    The texture is addressed as a flat (h·w, C) table with ``np.take`` (one gather of whole rows per tap)."""
     h, w = tex.shape[:2]
-    x = (uv[:, 0] * repeat) % 1.0 * w - 0.5
-    y = (1.0 - (uv[:, 1] * repeat) % 1.0) * h - 0.5
-    x0, y0 = np.floor(x).astype(np.int64), np.floor(y).astype(np.int64)
-    fx, fy = (x - x0)[:, None].astype(tex.dtype), (y - y0)[:, None].astype(tex.dtype)
-    x0m, x1m, y0m, y1m = x0 % w, (x0 + 1) % w, y0 % h, (y0 + 1) % h
-    return ((tex[y0m, x0m] * (1 - fx) + tex[y0m, x1m] * fx) * (1 - fy) +
-            (tex[y1m, x0m] * (1 - fx) + tex[y1m, x1m] * fx) * fy)
+    flat = tex.reshape(h * w, -1)
+    u = np.asarray(uv, np.float32)
+    x = (u[:, 0] * np.float32(repeat)) % 1.0 * w - 0.5
+    y = (1.0 - (u[:, 1] * np.float32(repeat)) % 1.0) * h - 0.5
+    xf, yf = np.floor(x), np.floor(y)
+    fx, fy = (x - xf).astype(tex.dtype)[:, None], (y - yf).astype(tex.dtype)[:, None]
+    x0, y0 = xf.astype(np.int64) % w, yf.astype(np.int64) % h
+    x1, y1 = (x0 + 1) % w, (y0 + 1) % h
+    r0, r1 = y0 * w, y1 * w
+    top = np.take(flat, r0 + x0, axis=0)
+    top += (np.take(flat, r0 + x1, axis=0) - top) * fx
+    bot = np.take(flat, r1 + x0, axis=0)
+    bot += (np.take(flat, r1 + x1, axis=0) - bot) * fx
+    top += (bot - top) * fy
+    return top
 
 
 def sky_blend(dirs: np.ndarray) -> np.ndarray:
@@ -299,12 +309,12 @@ class SetRenderer:
     def _sun_visibility(self, kind, p, n):
         sun = self.spec.sun_dir.astype(np.float32)
         sun_cos = np.zeros(kind.shape[0], np.float32)
-        surf = np.flatnonzero(kind >= 0)
-        if surf.size:
-            nl = np.clip(n[surf] @ sun, 0.0, None)
-            lit = surf[nl > 0]
+        nl = n @ sun
+        lit = np.flatnonzero((kind >= 0) & (nl > 0))
+        if lit.size:
             occ = self.tracer.occluded(p[lit] + n[lit] * 1e-4, sun)
-            sun_cos[lit[~occ]] = np.clip(n[lit[~occ]] @ sun, 0.0, None)
+            vis = lit[~occ]
+            sun_cos[vis] = nl[vis]
         return sun_cos
 
     def camera_rays(self) -> np.ndarray:
@@ -317,7 +327,9 @@ class SetRenderer:
     def blocks(self, block_rays: int = 1 << 18):
         """Yield (pixel slice, directions (spp·n, 3) sample-major) over blocks of pixels, so that all samples of
         a block go through Mitsuba in one kernel launch per query."""
+        t0 = time.perf_counter()
         dirs = self.camera_rays()
+        self.timing["geometry"] += time.perf_counter() - t0
         spp, P = dirs.shape[:2]
         step = max(1, block_rays // spp)
         for a in range(0, P, step):
@@ -413,6 +425,7 @@ class SetRenderer:
         rgb = np.zeros((H * W, 3), np.float32)
         S = np.zeros((H * W, N), np.float32)
         A = np.zeros(H * W, np.float32)
+        has_s = np.zeros(H * W, bool)
         plate = spec.background.reshape(-1, 3).astype(np.float32)
         for sl, dirs in self.blocks():
             h = self.trace(dirs)
@@ -433,16 +446,21 @@ class SetRenderer:
                 for j in range(spp):
                     k = (ray >= j * n) & (ray < (j + 1) * n)
                     S[sl.start + ray[k] - j * n] += s[k]
+                    has_s[sl.start + ray[k] - j * n] = True
             rgb[sl] = out.reshape(spp, n, 3).sum(0)
             A[sl] = (~bg).reshape(spp, n).sum(0)
         w = np.float32(1.0 / spp)
-        out = HybridImage((rgb * w).reshape(H, W, 3), (S * w).reshape(H, W, N), (A * w).reshape(H, W), spec.grid)
+        S[has_s] *= w  # the spectral part is sparse: only the film objects' pixels are touched
+        out = HybridImage((rgb * w).reshape(H, W, 3), S.reshape(H, W, N), (A * w).reshape(H, W), spec.grid,
+                          has_s.reshape(H, W))
         self.timing["shading"] = time.perf_counter() - t_start - self.timing["geometry"]
         return out
 
 
 def spectral_coverage(hybrid: HybridImage) -> float:
     """Fraction of pixels with a non-zero spectral part."""
+    if hybrid.mask is not None:
+        return float(np.mean(hybrid.mask & np.any(hybrid.spectral != 0, axis=-1)))
     return float(np.mean(np.any(hybrid.spectral != 0, axis=-1)))
 
 
