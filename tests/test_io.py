@@ -110,3 +110,13 @@ def test_png_tone_map_is_the_documented_one(tmp_path):
     assert back[0, 1, 0] == 255  # clipped
     # auto exposure maps the 99.5th percentile of luminance to 1
     assert io.auto_exposure(np.full((4, 4, 3), 0.25, np.float32)) == pytest.approx(4.0)
+
+
+def test_colour_module_yiq_and_srgb_roundtrip():
+    from natscene import color
+    rgb = np.random.default_rng(2).uniform(0, 1, (10, 3)).astype(np.float32)
+    yiq = color.srgb_to_yiq(rgb)
+    np.testing.assert_allclose(yiq[:, 0], rgb @ [0.299, 0.587, 0.114], atol=1e-6)   # Y = Rec. 601 luma
+    np.testing.assert_allclose(color.srgb_to_yiq(np.ones(3)), [1, 0, 0], atol=1e-5)  # white has no chroma
+    np.testing.assert_allclose(color.yiq_to_srgb(yiq), rgb, atol=1e-5)
+    np.testing.assert_allclose(color.linear_to_srgb(color.srgb_to_linear(rgb)), rgb, atol=1e-5)

@@ -46,11 +46,19 @@ def linear_srgb_to_lab(rgb: np.ndarray) -> np.ndarray:
     return np.asarray(colour.XYZ_to_Lab(xyz, white), np.float32)
 
 
+#: NTSC 1953 RGB -> YIQ matrix (FCC; Y row = Rec. 601 luma), used by Dong 2007 §3.5 for recolouring.
+#: colour-science 0.4.7 has no YIQ conversion, so the matrix is given here.
+RGB_TO_YIQ = np.array([[0.299, 0.587, 0.114],
+                       [0.595716, -0.274453, -0.321263],
+                       [0.211456, -0.522591, 0.311135]])
+YIQ_TO_RGB = np.linalg.inv(RGB_TO_YIQ)
+
+
 def srgb_to_yiq(rgb: np.ndarray) -> np.ndarray:
-    """RGB -> YIQ (NTSC) as used by Dong 2007 §3.5 for recolouring."""
-    return np.asarray(colour.RGB_to_YIQ(np.asarray(rgb, np.float64)), np.float32)
+    """RGB -> YIQ (NTSC), applied to the values given (Dong 2007 §3.5 works on display RGB)."""
+    return (np.asarray(rgb, np.float64) @ RGB_TO_YIQ.T).astype(np.float32)
 
 
 def yiq_to_srgb(yiq: np.ndarray) -> np.ndarray:
-    """YIQ (NTSC) -> RGB."""
-    return np.asarray(colour.YIQ_to_RGB(np.asarray(yiq, np.float64)), np.float32)
+    """YIQ (NTSC) -> RGB, the exact inverse of :func:`srgb_to_yiq`."""
+    return (np.asarray(yiq, np.float64) @ YIQ_TO_RGB.T).astype(np.float32)
