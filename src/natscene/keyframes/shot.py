@@ -1,0 +1,169 @@
+"""A shot: keyframes on a frame axis and the parameter set of every frame (Dobashi et al. 2012 §5.2, §6).
+
+Each keyframe names a fitted parameter set (``fit: <config keyframe>``, the chosen set of
+``results/fit/<keyframe>/params.yaml``) and/or explicit parameters (which override the fitted ones), a sun
+direction and a camera (both default to those of the fit's view). A frame between two keyframes depends on
+those two only (and, with the Catmull-Rom camera path, on the cameras of their neighbours), which is what
+lets the workflow rerun only the frames a keyframe edit affects. Frames before the first / after the last
+keyframe hold that keyframe.
+"""
+from __future__ import annotations
+
+import bisect
+
+import numpy as np
+
+from natscene.geometry import sun_direction
+from natscene.io import InputError
+from natscene.keyframes.interpolate import (catmull_rom, direction_to_sun_angles, ease, lerp, segment_t,
+                                            slerp)
+
+PARAMS = ("L_in", "g", "sigma_t", "beta", "L_amb")  # scalars, interpolated linearly
+COLOURS = ("c_in", "kappa_a")  # RGB triples, interpolated linearly per channel
+
+
+def _key(shot: str, i: int | None = None) -> str:
+    return f"shots.{shot}" + (f".keyframes[{i}]" if i is not None else "")
+
+
+def validate_shot(name: str, shot: dict, config: dict) -> None:
+    """Config-level checks of one shot (raises InputError naming the key)."""
+    if shot["volume"] not in config.get("volumes", {}):
+        raise InputError(f"config key '{_key(name)}.volume': {shot['volume']!r} is not in 'volumes'")
+    ats = [kf["at"] for kf in shot["keyframes"]]
+    if len(set(ats)) != len(ats):
+        raise InputError(f"config key '{_key(name)}.keyframes': two keyframes share a frame index ({sorted(ats)})")
+    for i, kf in enumerate(shot["keyframes"]):
+        if kf["at"] >= shot["frames"]:
+            raise InputError(f"config key '{_key(name, i)}.at': frame {kf['at']} is past the shot's last frame "
+                             f"{shot['frames'] - 1}; lower it or raise '{_key(name)}.frames'")
+        resolve_keyframe(name, i, kf, config)
+
+
+def sorted_keyframes(shot: dict) -> list[tuple[int, dict]]:
+    """(config index, keyframe) pairs in frame order."""
+    return sorted(enumerate(shot["keyframes"]), key=lambda p: p[1]["at"])
+
+
+def resolve_keyframe(shot_name: str, index: int, kf: dict, config: dict) -> dict:
+    """A keyframe with its sun and camera filled in from the fit's view where not given (config only)."""
+    fit = kf.get("fit")
+    view = None
+    if fit is not None:
+        if fit not in config.get("keyframes", {}):
+            raise InputError(f"config key '{_key(shot_name, index)}.fit': {fit!r} is not in 'keyframes'")
+        view = config.get("views", {}).get(config["keyframes"][fit]["view"])
+    out = {"index": index, "at": int(kf["at"]), "fit": fit, "params": dict(kf.get("params") or {})}
+    for part in ("sun", "camera"):
+        if kf.get(part) is not None:
+            out[part] = dict(kf[part])
+        elif view is not None:
+            out[part] = dict(view[part])
+        else:
+            raise InputError(f"config key '{_key(shot_name, index)}.{part}': needed when the keyframe has no "
+                             f"'fit' whose view would give it")
+    out["camera"].setdefault("up", [0.0, 1.0, 0.0])
+    out["camera"].setdefault("fov", 40.0)
+    if fit is None:
+        missing = [p for p in PARAMS + COLOURS if p not in out["params"]]
+        if missing:
+            raise InputError(f"config key '{_key(shot_name, index)}.params': {missing} missing; give them or "
+                             f"name a fitted keyframe with 'fit'")
+    return out
+
+
+def bracket(shot: dict, frame: int) -> list[int]:
+    """Config indices of the keyframes frame ``frame`` depends on: the one at it, or the two around it
+    (the nearest one before the first / after the last keyframe)."""
+    keys = sorted_keyframes(shot)
+    ats = [kf["at"] for _, kf in keys]
+    j = bisect.bisect_left(ats, frame)
+    if j < len(ats) and ats[j] == frame:
+        return [keys[j][0]]
+    if j == 0:
+        return [keys[0][0]]
+    if j == len(ats):
+        return [keys[-1][0]]
+    return [keys[j - 1][0], keys[j][0]]
+
+
+def camera_neighbours(shot: dict, frame: int) -> list[int]:
+    """Config indices of the keyframes a Catmull-Rom camera at ``frame`` uses (the bracket and one either side)."""
+    keys = sorted_keyframes(shot)
+    br = bracket(shot, frame)
+    order = [i for i, _ in keys]
+    lo = max(order.index(br[0]) - 1, 0)
+    hi = min(order.index(br[-1]) + 1, len(order) - 1)
+    return order[lo:hi + 1]
+
+
+def keyframe_params(resolved: dict, fitted: dict | None, source: str = "") -> dict:
+    """The full parameter set of a keyframe: the fit's chosen set overridden by the explicit ``params``."""
+    out = {}
+    if fitted is not None:
+        chosen = fitted.get("chosen")
+        if not isinstance(chosen, dict):
+            raise InputError(f"{source}: no 'chosen' parameter set; rerun the fit rule")
+        out.update({k: chosen[k] for k in PARAMS + COLOURS if k in chosen})
+    out.update(resolved.get("params", {}))
+    missing = [p for p in PARAMS + COLOURS if p not in out]
+    if missing:
+        raise InputError(f"{source or 'keyframe'}: parameters {missing} missing (neither fitted nor given)")
+    full = {p: float(out[p]) for p in PARAMS}
+    for c in COLOURS:
+        v = np.asarray(out[c], np.float64).reshape(-1)
+        if v.size == 1:
+            v = np.repeat(v, 3)
+        if v.size != 3:
+            raise InputError(f"{source or 'keyframe'}: '{c}' must be a number or [r, g, b], got {out[c]!r}")
+        full[c] = [float(x) for x in v]
+    return full
+
+
+def _camera_vec(cam: dict) -> np.ndarray:
+    return np.concatenate([cam["position"], cam["look_at"], cam.get("up", [0, 1, 0]), [cam.get("fov", 40.0)]])
+
+
+def _camera_dict(v: np.ndarray) -> dict:
+    up = v[6:9] / np.linalg.norm(v[6:9])
+    return {"position": v[0:3].tolist(), "look_at": v[3:6].tolist(), "up": up.tolist(), "fov": float(v[9])}
+
+
+def frame_state(frame: int, keys: list[dict], easing: str = "linear", camera_path: str = "linear",
+                path_keys: list[dict] | None = None) -> dict:
+    """Everything a frame needs, from its one or two keyframes (``keys``: resolved keyframes in frame order,
+    each with its full ``params`` from :func:`keyframe_params`).
+
+    Returns {frame, t (eased), keyframes: [at...], params (scalars + c_in, kappa_a), sun: {direction,
+    azimuth, elevation}, camera: {position, look_at, up, fov}}. ``path_keys`` (Catmull-Rom only): the
+    resolved keyframes around the segment, in frame order, with their cameras.
+    """
+    if not 1 <= len(keys) <= 2:
+        raise ValueError("frame_state: one or two keyframes")
+    a, b = keys[0], keys[-1]
+    t = ease(segment_t(frame, a["at"], b["at"]), easing) if len(keys) == 2 else 0.0
+    t = float(t)
+    params = {}
+    for p in PARAMS:
+        params[p] = float(lerp(a["params"][p], b["params"][p], t))
+    for c in COLOURS:
+        params[c] = lerp(a["params"][c], b["params"][c], t).tolist()
+    d0 = sun_direction(a["sun"]["azimuth"], a["sun"]["elevation"])
+    d1 = sun_direction(b["sun"]["azimuth"], b["sun"]["elevation"])
+    if t == 0:
+        d, (az, el) = d0, (float(a["sun"]["azimuth"]), float(a["sun"]["elevation"]))
+    elif t == 1:
+        d, (az, el) = d1, (float(b["sun"]["azimuth"]), float(b["sun"]["elevation"]))
+    else:
+        d = slerp(d0, d1, t)
+        az, el = direction_to_sun_angles(d)
+    if camera_path == "catmull_rom" and len(keys) == 2 and path_keys and len(path_keys) > 2:
+        x = a["at"] + t * (b["at"] - a["at"])
+        cam = _camera_dict(catmull_rom([_camera_vec(k["camera"]) for k in path_keys],
+                                       [k["at"] for k in path_keys], x))
+    elif camera_path in ("linear", "catmull_rom"):
+        cam = _camera_dict(lerp(_camera_vec(a["camera"]), _camera_vec(b["camera"]), t))
+    else:
+        raise ValueError(f"unknown camera path {camera_path!r} (linear or catmull_rom)")
+    return {"frame": int(frame), "t": t, "keyframes": [int(k["at"]) for k in keys], "params": params,
+            "sun": {"direction": np.asarray(d, float).tolist(), "azimuth": az, "elevation": el}, "camera": cam}
