@@ -3,6 +3,7 @@
 # {product: shots/<shot>/frames/{frame:04d}.exr}), ground texture (tiles product), leaf/petal textures
 # (patterns products), thin-film objects.
 from natscene.composite.inputs import image_files as _composite_image_files
+from natscene.composite.inputs import sun_files as _composite_sun_files
 
 
 def _composite_inputs(wc):
@@ -12,8 +13,7 @@ def _composite_inputs(wc):
     files += _composite_image_files(entry["ground"]["texture"], frame, RESULTS, str(ROOT))
     for leaf in entry.get("leaves", []):
         files += _composite_image_files(leaf["texture"], frame, RESULTS, str(ROOT))
-    if entry["sun"].get("sky_product"):
-        files.append(f"{RESULTS}/{entry['sun']['sky_product']}")
+    files += _composite_sun_files(entry, frame, RESULTS)
     return files
 
 

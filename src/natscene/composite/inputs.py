@@ -76,13 +76,21 @@ def build_set(entry: dict, frame: int, results: str, root: str, sun_c_in=None) -
                for o in entry.get("objects", [])]
     wl = entry.get("wavelengths", {})
     grid = WavelengthGrid(float(wl.get("start", 380)), float(wl.get("stop", 780)), float(wl.get("step", 5)))
-    sun = entry["sun"]
-    c_in = np.asarray(sun.get("color", (1, 1, 1)), np.float64) if sun_c_in is None else np.asarray(sun_c_in, np.float64)
+    sun = {**entry["sun"], **sun_from_shot(entry, frame, results)}
+    if sun_c_in is not None:
+        sun["c_in"] = sun_c_in
+    c_in = np.asarray(sun.get("c_in", sun.get("color", (1, 1, 1))), np.float64)
     return SetSpec(cam, bg, ground, float(g["size"]), float(g["repeat"]), leaves, objects,
                    sun_direction(sun["azimuth"], sun["elevation"]),
                    sun_spectrum_from_rgb(c_in, float(sun["intensity"]), grid, sun.get("spd", "d65")),
                    sky_zenith=zen, sky_horizon=hor, spp=int(entry["spp"]), grid=grid,
                    upsampling=entry["upsampling"], angle_step_deg=float(entry["angle_step_deg"]))
+
+
+def sun_files(entry: dict, frame: int, results: str) -> list[str]:
+    """Result files the sun of a composite frame reads: a sky product's sun.yaml and/or a shot frame's state."""
+    sun = entry["sun"]
+    return [str(Path(results) / sun[k].format(frame=frame)) for k in ("sky_product", "shot_state") if sun.get(k)]
 
 
 def sun_c_in_from_product(entry: dict, results: str):
@@ -94,3 +102,20 @@ def sun_c_in_from_product(entry: dict, results: str):
     if not isinstance(data, dict) or "c_in" not in data:
         raise InputError(f"{Path(results) / p}: no c_in key (expected the sky stage's sun.yaml)")
     return data["c_in"]
+
+
+def sun_from_shot(entry: dict, frame: int, results: str) -> dict:
+    """Sun of a shot frame when ``sun.shot_state`` names the frame's interpolated state
+    (``shots/<shot>/params/{frame:04d}.yaml``): ``{azimuth, elevation, c_in}`` so the set is lit like the
+    clouds behind it; {} otherwise."""
+    p = entry["sun"].get("shot_state")
+    if not p:
+        return {}
+    path = Path(results) / p.format(frame=frame)
+    data = read_yaml(path)
+    try:
+        return {"azimuth": float(data["sun"]["azimuth"]), "elevation": float(data["sun"]["elevation"]),
+                "c_in": [float(c) for c in data["params"]["c_in"]]}
+    except (TypeError, KeyError, ValueError) as e:
+        raise InputError(f"{path} (config composite sun.shot_state): expected keys sun.azimuth, sun.elevation and "
+                         f"params.c_in (the interpolate stage's frame state); {e!r}") from None

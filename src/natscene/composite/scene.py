@@ -40,7 +40,8 @@ log = logging.getLogger("natscene")
 # ------------------------------------------------------------------------------------------ the set
 @dataclass
 class Leaf:
-    """A textured leaf/petal: a rectangle with an elliptical cut-out, lambertian, two-sided."""
+    """A textured leaf/petal: a rectangle cut out by the texture's alpha (an inscribed ellipse without one),
+    lambertian, two-sided."""
 
     texture: np.ndarray  # (h, w, 3) linear albedo (alpha channel optional as 4th)
     center: tuple = (0.0, 0.05, 0.0)
@@ -280,12 +281,15 @@ class SetRenderer:
         return kind, index
 
     def _leaf_keep(self, index: np.ndarray, uv: np.ndarray) -> np.ndarray:
-        keep = ((uv[:, 0] - 0.5) ** 2 + (uv[:, 1] - 0.5) ** 2) <= 0.25  # elliptical cut-out
+        keep = np.ones(index.size, bool)
         for i, a in enumerate(self.leaf_alpha):
-            if a is not None:
-                m = index == i
-                if m.any():
-                    keep[m] &= sample_texture(a, uv[m])[:, 0] > 0.5
+            m = index == i
+            if not m.any():
+                continue
+            if a is None:  # no alpha: an elliptical leaf inscribed in the rectangle
+                keep[m] = ((uv[m, 0] - 0.5) ** 2 + (uv[m, 1] - 0.5) ** 2) <= 0.25
+            else:  # the texture's alpha is the shape (pattern petals, season leaves)
+                keep[m] = sample_texture(a, uv[m])[:, 0] > 0.5
         return keep
 
     def _surface_hits(self, origins, dirs):
