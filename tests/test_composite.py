@@ -107,3 +107,38 @@ def test_film_colour_shifts_with_angle_and_thickness():
     c60 = spectrum_to_rgb(t.reflectance(np.cos(np.radians(60.0))) * d65())
     de = colour.delta_E(linear_srgb_to_lab(c0), linear_srgb_to_lab(c60), method="CIE 2000")
     assert de > 5
+
+
+def test_sun_follows_the_shot_frame_state(tmp_path):
+    """sun.shot_state: the set is lit by the frame's sun direction and c_in; a malformed state names the file."""
+    import pytest
+    from natscene.composite.inputs import build_set
+    from natscene.geometry import sun_direction
+    from natscene.io import InputError, write_yaml
+    write_yaml(tmp_path / "shots/s/params/0003.yaml", {"sun": {"azimuth": 105.0, "elevation": 3.0},
+                                                          "params": {"c_in": [1.45, 0.92, 0.48]}})
+    entry = {"resolution": [8, 6], "camera": {"position": [0, 0.3, -1.5], "look_at": [0, 0.3, 0], "fov": 40},
+             "background": {"color": [0.5, 0.6, 0.8]}, "ground": {"texture": {"color": [0.2, 0.4, 0.1]}, "size": 4.0,
+                                                                  "repeat": 2.0},
+             "sun": {"azimuth": 130, "elevation": 35, "intensity": 3.0, "spd": "matched",
+                     "shot_state": "shots/s/params/{frame:04d}.yaml"},
+             "objects": [], "spp": 1, "upsampling": "mallett2019", "angle_step_deg": 1.0}
+    spec = build_set(entry, 3, str(tmp_path), str(tmp_path))
+    np.testing.assert_allclose(spec.sun_dir, sun_direction(105.0, 3.0))
+    rgb = spectrum_to_rgb(spec.sun_spectrum())
+    np.testing.assert_allclose(rgb / rgb[1], np.array([1.45, 0.92, 0.48]) / 0.92, rtol=2e-2)
+    write_yaml(tmp_path / "shots/s/params/0004.yaml", {"sun": {"azimuth": 105.0}})
+    with pytest.raises(InputError, match="0004.yaml"):
+        build_set(entry, 4, str(tmp_path), str(tmp_path))
+
+
+def test_sparse_final_equals_dense_final():
+    rng = np.random.default_rng(1)
+    rgb = rng.random((4, 5, 3)).astype(np.float32)
+    S = np.zeros((4, 5, DEFAULT_GRID.size), np.float32)
+    S[1, 2] = rng.random(DEFAULT_GRID.size)
+    mask = np.zeros((4, 5), bool)
+    mask[1, 2] = True
+    dense = HybridImage(rgb, S, np.ones((4, 5), np.float32)).final()
+    sparse = HybridImage(rgb, S, np.ones((4, 5), np.float32), mask=mask).final()
+    np.testing.assert_allclose(sparse, dense, atol=1e-6)

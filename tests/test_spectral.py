@@ -130,3 +130,16 @@ def test_d65_is_rgb_white_and_upsampling_round_trips():
 def test_sun_spd_matches_c_in():
     for c in ([1.0, 0.85, 0.6], [0.8, 0.9, 1.0]):
         np.testing.assert_allclose(G.spectrum_to_rgb(sun_spd(c)), c, atol=2e-3)
+
+
+def test_complex_index_strings():
+    import pytest
+    from natscene.io import InputError
+    from natscene.spectral.indices import complex_index
+    wl = np.array([400.0, 550.0, 700.0])
+    np.testing.assert_array_equal(complex_index("2.0+0.05j", wl), np.full(3, 2.0 + 0.05j))
+    np.testing.assert_array_equal(complex_index(1.56, wl), np.full(3, 1.56 + 0j))
+    with pytest.raises(InputError):
+        complex_index("1.5-0.1j", wl)  # kappa < 0 would amplify
+    with pytest.raises(InputError, match="available"):
+        complex_index("Unobtainium", wl)
