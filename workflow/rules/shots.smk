@@ -12,6 +12,9 @@ from natscene.keyframes.shot import validate_shot as _validate_shot
 for _shot_name, _shot_entry in config.get("shots", {}).items():
     _validate_shot(_shot_name, _shot_entry, config)
 
+localrules: interpolate, animation  # light bookkeeping: on a cluster they run on the submitting host
+
+
 SHOT_ANIMATION_SUFFIX = _anim_suffix()  # ".mp4" where imageio-ffmpeg finds ffmpeg, else ".gif"
 
 
