@@ -12,8 +12,9 @@ from natscene.patterns.venation import Venation, venation_from_nodes
 
 def test_turing_wavelength_matches_linear_stability():
     # t = 0 (no venation) on a square: the FFT peak is the fastest-growing mode of the linearised Eq. 3.5
-    p = RDParams(S=0.5, D_A=1.6, D_B=32.0, t=0, K_A=1.0, K_B=1.0, beta=0.2, noise=0.05, dt=0.5,
-                 max_steps=500, tol=1e-7, seed=3)
+    # (S and D scaled by 1/64 from S = 0.5, D_B = 32: same wavelength, within the explicit limit D dt <= 1/2)
+    p = RDParams(S=0.5 / 64, D_A=1.6 / 64, D_B=32.0 / 64, t=0, K_A=1.0, K_B=1.0, beta=0.2, noise=0.05, dt=1.0,
+                 max_steps=12000, tol=1e-7, seed=3)
     lam = fastest_wavelength(p)
     assert 8 < lam < 20
     r = simulate(np.ones((96, 96), np.float32), None, p)

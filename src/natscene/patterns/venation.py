@@ -35,6 +35,9 @@ class Venation:
     width: np.ndarray
     dist: np.ndarray
     root: tuple[int, int]
+    #: centreline of every root-to-tip vein path as (K, 2) int arrays of (row, col), 1-pixel steps; used for
+    #: the non-adjacent vascular connections of Eq. 3.1c. None when unknown (photo-extracted venation).
+    paths: list | None = None
 
     @classmethod
     def empty(cls, shape, root=(0, 0)) -> "Venation":
@@ -117,7 +120,30 @@ def venation_from_nodes(shape, spec: dict, vein_px: float = 3.0, key: str = "ven
     rootpx = to_px(root)
     root_rc = (int(np.clip(round(rootpx[1]), 0, h - 1)), int(np.clip(round(rootpx[0]), 0, w - 1)))
     vas = width > 0
-    return Venation(vas, width, dist, root_rc)
+    return Venation(vas, width, dist, root_rc, _centre_paths(shape, pts, par, to_px))
+
+
+def _centre_paths(shape, pts, par, to_px):
+    """Root-to-tip centrelines (row, col) of the vein tree, one pixel per step, clipped to the grid."""
+    h, w = shape
+    kids = {i: [] for i in range(len(pts))}
+    for i, p in enumerate(par[1:], start=1):
+        kids[p].append(i)
+    out, stack = [], [(0, [np.rint(to_px(pts[0]))[None].astype(int)])]
+    while stack:
+        i, acc = stack.pop()
+        if not kids[i]:
+            P = np.concatenate(acc)[:, ::-1]  # (x, y) -> (row, col)
+            P = P[np.r_[True, np.any(P[1:] != P[:-1], axis=1)]]
+            P = P[(P[:, 0] >= 0) & (P[:, 0] < h) & (P[:, 1] >= 0) & (P[:, 1] < w)]
+            out.append(P)
+            continue
+        for j in kids[i]:
+            p0, p1 = to_px(pts[i]), to_px(pts[j])
+            n = int(np.ceil(np.linalg.norm(p1 - p0))) + 1
+            s = np.linspace(0.0, 1.0, n)[1:, None]
+            stack.append((j, acc + [np.rint(p0 + (p1 - p0) * s).astype(int)]))
+    return out
 
 
 def _depth(i, par):
