@@ -10,7 +10,7 @@ def main(snakemake, log):
     keys = []
     for k in par.keyframes:
         fitted = io.read_yaml(k["fit_path"]) if k.get("fit_path") else None
-        source = k["fit_path"] or f"config key 'shots.{snakemake.wildcards.shot}.keyframes[{k['index']}]'"
+        source = k["fit_path"] or f"config key 'shots.{snakemake.wildcards.shot}.keyframes' (at {k['at']})"
         keys.append({**k, "params": keyframe_params(k, fitted, source)})
     state = frame_state(frame, keys, easing=par.easing, camera_path=par.camera_path,
                         path_keys=list(par.path_keys) or None)

@@ -252,7 +252,7 @@ SNAKEMAKE = [sys.executable, "-m", "snakemake"]
 def _snake(repo, workdir, config, *args):
     env = dict(os.environ, PYTHONPATH=str(repo / "src"), PYTHONUNBUFFERED="1")
     cmd = SNAKEMAKE + ["-s", str(repo / "Snakefile"), "--configfile", str(config), "--directory", str(workdir),
-                       "--cores", "1", *args]
+                       "--cores", "2", *args]
     proc = subprocess.run(cmd, env=env, capture_output=True, text=True)
     if proc.returncode != 0:
         raise AssertionError(f"snakemake {' '.join(args)} failed:\n{proc.stdout[-3000:]}\n{proc.stderr[-4000:]}")
@@ -293,3 +293,8 @@ def test_editing_one_keyframe_reruns_only_its_frames(tmp_path):
     conf["shots"]["s"]["keyframes"][2]["sun"]["elevation"] = 1.0
     cfg.write_text(yaml.safe_dump(conf))
     assert _scheduled(_snake(repo, workdir, cfg, "-n", *targets)) == [4, 5, 6, 7]
+    # listing the same keyframes in another order changes nothing
+    conf = _shot_config(3.0)
+    conf["shots"]["s"]["keyframes"].reverse()
+    cfg.write_text(yaml.safe_dump(conf))
+    assert _scheduled(_snake(repo, workdir, cfg, "-n", *targets)) == []

@@ -35,6 +35,7 @@ def _shot_keys(wc):
             for i in _shot_bracket(shot, int(wc.frame))]
     for k in keys:
         k["fit_path"] = f"{RESULTS}/fit/{k['fit']}/params.yaml" if k["fit"] else None
+        del k["index"]  # the position in the list is not a setting: reordering keyframes reruns nothing
     return keys
 
 
