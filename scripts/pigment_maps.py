@@ -1,4 +1,6 @@
 """Rule pigment_maps: venation-aware reaction-diffusion on a petal (Dong 2007 §3.3)."""
+from pathlib import Path
+
 import numpy as np
 
 from natscene.io import write_exr, write_png
@@ -10,7 +12,7 @@ from natscene.runner import run
 def main(snakemake, log):
     spec = snakemake.params.spec
     size = spec["size"]
-    mask = petal_shape(spec["shape"], size, snakemake.params.root)
+    mask = petal_shape(spec["shape"], size, lambda q: str(Path(snakemake.params.root) / q))
     ven = venation(spec["venation"], size)
     p = rd_params(spec["rd"], snakemake.params.seed)
     log.info(f"pattern {snakemake.wildcards.pattern}: {size[0]}x{size[1]}, {int(mask.sum())} petal cells, "

@@ -7,7 +7,7 @@ rule pigment_maps:
     params:
         spec=lambda wc: config["patterns"][wc.pattern],
         seed=config["seed"],
-        root=src,
+        root=str(ROOT),
         code=fingerprint("patterns", "io"),
     log:
         f"{RESULTS}/logs/pigment_maps/{{pattern}}.log",
