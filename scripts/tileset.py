@@ -21,7 +21,13 @@ def main(snakemake, log):
     ts = tile_set(spec["set"])
     params = GAParams.from_dict(spec["ga"])
     log.info(f"{name}: example {W}x{H}, set {ts.name} ({ts.m} tiles, {ts.n} patches), tile {s}px")
-    b = construct(example, ts, s, params, seed=int(spec["seed"]), margin=float(spec["margin"]))
+    seams = spec["seams"]
+    b = construct(example, ts, s, params, seed=int(spec["seed"]), margin=float(spec["margin"]),
+                  core=float(seams["core"]), normalise=float(seams["normalise"]),
+                  junction_weight=float(seams["junction_weight"]), candidates=int(seams["candidates"]),
+                  passes=int(seams["passes"]))
+    log.info(f"seams: energy {b.seam_costs.sum():.1f} over {ts.m} tiles, "
+             f"{np.mean([len(v) for v in b.extra['sources']]):.1f} merged sources per tile")
     log.info(f"GA: E {b.ga.initial_best_E:.2f} (best initial) -> {b.ga.E:.2f} after "
              f"{len(b.ga.log) - 1} generations, {b.ga.evaluations} evaluations")
     tiles = b.tiles
@@ -45,10 +51,12 @@ def main(snakemake, log):
     write_yaml(snakemake.output.meta, {
         "set": ts.name, "tile_size": s, "colours": list(ts.colours),
         "tiles": [{"index": j, "corners": list(t), "label": lab, "matching_patch": b.ga.matches[j],
-                   "D": b.ga.D[j], "seam_cost": b.seam_costs[j], "embedded": j in embedded}
+                   "D": b.ga.D[j], "seam_cost": b.seam_costs[j], "embedded": j in embedded,
+                   "merged_sources": [list(v) for v in b.extra["sources"][j]]}
                   for j, (t, lab) in enumerate(zip(ts.as_tuples(), ts.labels()))],
         "patches": {c: b.ga.genes[i] for i, c in enumerate(ts.colours)},
         "example": str(snakemake.input.example), "example_size": [W, H],
+        "seams": dict(seams),
         "ga": {"params": vars(params), "seed": int(spec["seed"]), "E": b.ga.E,
                "initial_best_E": b.ga.initial_best_E, "initial_mean_E": b.ga.initial_mean_E,
                "evaluations": b.ga.evaluations, "log": b.ga.log},

@@ -1,6 +1,8 @@
 """Tile-set construction (Dong 2007 §5.4.3 working flow): GA selection of the sample patches, the
 intermediate tiles cut from the centre of the 2x2 patch blocks, and junction removal by merging each
-tile's best matching patch with a circle-constrained graph-cut seam.
+tile's best matching patch with a circle-constrained graph-cut seam (§5.2), refined by further merges of
+the tile's own sample patches continued past their quarters and of the next-best matching patches, each
+kept only where it lowers the seam energy (:func:`natscene.tiles.graphcut.build_tile`).
 
 Matching errors and seams are computed on display-encoded (sRGB) values, where squared differences are
 closer to perceived differences; the tiles themselves are cut from the linear example with the same
@@ -14,7 +16,7 @@ import numpy as np
 
 from natscene.color import linear_to_srgb
 from natscene.tiles.genetic import GAParams, GAResult, MatchCost, quarter_layout, run_ga
-from natscene.tiles.graphcut import merge
+from natscene.tiles.graphcut import build_tile, intermediate_offsets, render
 from natscene.tiles.omega import TileSet
 
 
@@ -44,9 +46,32 @@ class TileSetBuild:
     extra: dict = field(default_factory=dict)
 
 
+def candidate_patches(cost: MatchCost, genes: np.ndarray, ts: TileSet, j: int, k: int,
+                      spacing: int = 3) -> list[tuple[int, int]]:
+    """The ``k`` best matching patches (top-left (y, x)) of tile ``j`` by Eq. 5.1, best first, at least
+    ``spacing`` pixels apart (Chebyshev) so they are not near-copies of each other."""
+    maps = cost.gene_maps(genes[np.unique(ts.tiles[j])])
+    idx = {c: i for i, c in enumerate(np.unique(ts.tiles[j]).tolist())}
+    total = sum(maps[idx[c], q] for q, c in enumerate(ts.tiles[j].tolist()))
+    out: list[tuple[int, int]] = []
+    for f in np.argsort(total, axis=None, kind="stable"):
+        c = divmod(int(f), cost.PW)
+        if all(max(abs(c[0] - d[0]), abs(c[1] - d[1])) >= spacing for d in out):
+            out.append(c)
+            if len(out) >= k:
+                break
+    return out
+
+
 def construct(example_linear: np.ndarray, ts: TileSet, tile_size: int, params: GAParams | None = None,
-              seed: int = 0, margin: float = 1.0) -> TileSetBuild:
-    """Build the ω-tile set ``ts`` from a linear example image (H, W, C)."""
+              seed: int = 0, margin: float = 1.0, core: float = 2.0, normalise: float = 0.0,
+              junction_weight: float = 3.0, candidates: int = 8, passes: int = 3) -> TileSetBuild:
+    """Build the ω-tile set ``ts`` from a linear example image (H, W, C).
+
+    ``margin``, ``core``, ``normalise``, ``junction_weight``, ``passes``: the graph-cut settings of
+    :func:`natscene.tiles.graphcut.build_tile`; ``candidates``: how many best matching patches are
+    tried (the first is Dong's matching patch, merged with the centre pinned); the tile's own four
+    sample patches, continued past their quarters, are tried after the first."""
     lin = np.asarray(example_linear, np.float32)
     if lin.ndim == 2:
         lin = lin[..., None]
@@ -55,17 +80,26 @@ def construct(example_linear: np.ndarray, ts: TileSet, tile_size: int, params: G
     cost = MatchCost(enc, tile_size, p.metric, p.mu)
     ga = run_ga(enc, ts, tile_size, p, seed=seed, cost=cost)
     s = int(tile_size)
-    inter_enc = intermediate_tiles(enc, ga.genes, ts, s)
+    color_cost = cost if p.metric == "color" else MatchCost(enc, s)
     inter_lin = intermediate_tiles(lin, ga.genes, ts, s)
     tiles = np.empty_like(inter_lin)
     masks = np.zeros((ts.m, s, s), bool)
     costs = np.zeros(ts.m)
+    sources = []
     for j in range(ts.m):
-        ty, tx = ga.matches[j]
-        _, mask, costs[j] = merge(inter_enc[j], enc[ty:ty + s, tx:tx + s], margin)
-        masks[j] = mask
-        tiles[j] = np.where(mask[..., None], lin[ty:ty + s, tx:tx + s], inter_lin[j])
-    return TileSetBuild(tiles, inter_lin, masks, costs, ga, ts, s)
+        off0 = intermediate_offsets(ga.genes, ts.tiles[j], s)
+        best = [tuple(int(v) for v in ga.matches[j])]
+        more = [c for c in candidate_patches(color_cost, ga.genes, ts, j, max(int(candidates), 1))
+                if c != best[0]]
+        quarters = list(dict.fromkeys(tuple(int(v) for v in off0[y, x])
+                                      for y, x in ((0, 0), (0, s - 1), (s - 1, 0), (s - 1, s - 1))))
+        cands = best + quarters + more[:max(int(candidates) - 1, 0)]
+        off, changed, costs[j], accepted = build_tile(enc, off0, cands, margin, core, normalise, passes,
+                                                      junction_weight)
+        tiles[j] = render(lin, off)
+        masks[j] = changed
+        sources.append(accepted)
+    return TileSetBuild(tiles, inter_lin, masks, costs, ga, ts, s, {"sources": sources})
 
 
 def atlas_layout(m: int) -> tuple[int, int]:

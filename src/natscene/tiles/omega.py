@@ -10,14 +10,36 @@ across the border (the quarters meeting at a vertex are the four quarters of one
 Scan-line tiling fixes TL, TR (from the tile above) and BL (from the tile on the left); BR is free
 ("don't care", Ng et al.). A set is *completable* when every triple that can arise has a tile.
 
-The basic set B (8 tiles, squares P = {R, G, B, Y}) is the unique-up-to-order balanced 8-tile set with
-the tiles <R,G,G,B> and <B,Y,Y,R> named in §5.3.2 in which every tile but <R,G,G,B> holds exactly one
-yellow except the double-yellow <B,Y,Y,R>, and which is closed under scan-line tiling (found by
-exhaustive search; see :func:`basic_set`). The extension rule of §5.3.2 (:func:`extend`): pick a
-reference colour, add the copy of every tile holding it with the reference replaced by a new colour,
-and for every tile with the reference colour twice add the two tiles where only one is replaced
-(the "additional" tiles needed where the old and new colour must be matched at once, Fig. 5.4).
-N1 = extend(B, Y -> C) (17 tiles), N2 = extend(N1, R -> M).
+The basic set B (8 tiles, squares P = {R, G, B, Y}) is Ng et al.'s size-8 set (Dong Fig. 5.3(a)); the
+figure is not in our copy of either paper, so B is reconstructed from what Dong's text states: it holds
+<R,G,G,B> and <B,Y,Y,R>; every tile but <R,G,G,B> holds yellow (its Y->C copies plus <R,G,G,B> are
+"a copy of B") and <B,Y,Y,R> is the only one holding it twice (the only source of "additional" tiles);
+and it is closed under scan-line tiling. An exhaustive search over all such 8-tile sets (every
+requirement a subset raises is one of the whole set, so a requirement-driven depth-first search finds
+them all) gives exactly 8 sets; two of them are subsets of Ng et al.'s 16-tile set (their Fig. 8(a), as transcribed
+in an open-source ω-tile implementation; :data:`NG_16_TILES`) and are transposes of each other. We use one of those two.
+
+Repetition: in every one of the 8 candidate sets each (TL, TR, BL) triple has exactly one tile, so a
+scan-line tiling with B is fixed by its first row and column and is periodic (with this B: the same tile
+4 rows down in 100% of positions). The extensions only add choices between the old and the new colour
+of one square (Y/C, R/M), so with N2 the pattern of colour classes stays periodic and the same tile
+recurs 4 rows down in about 26% of positions (1/36 for independent draws); G and B vertices always hold
+the same patch. :func:`tile_set` also offers N3 and N4 (the rule applied again with G -> W and
+B -> K, as §5.3.2 allows: "we can keep on increasing the sample patches"), which give every vertex a
+choice of two patches.
+
+The extension rule of §5.3.2 (:func:`extend`): pick a reference colour, add the copy of every tile
+holding it with the reference replaced by a new colour, and for every tile with the reference colour
+twice add the two tiles where only one is replaced (the "additional" tiles needed where the old and new
+colour must be matched at once, Fig. 5.4). N1 = extend(B, Y -> C) (8 + 7 + 2 = 17 tiles),
+N2 = extend(N1, R -> M) (36 tiles).
+
+Dong writes that N2 "contains 38 tiles". With the rule as stated, |N2| = |N1| + (tiles of N1 holding R)
++ 2 x (tiles of N1 holding R twice) = 17 + (2 r + 1) + 4 d, where r and d count the tiles of B holding R
+and holding R twice; for a balanced B (each square on 8 corners, r + d = 8) that is 34 + 2 d, so 38 needs
+two double-red tiles in B. None of the 8 sets that satisfy the text has that (all have d = 1 and give 32,
+34 or 36 tiles; the two subsets of Ng's 16-tile set give 36), so we keep 36 and take the 38 to be a
+miscount in the thesis (tests/test_tiles.py re-derives the count and checks the subsets of the 16-set).
 """
 from __future__ import annotations
 
@@ -28,15 +50,20 @@ import numpy as np
 
 #: display colours of the squares (sRGB 0..1), for tile-set diagrams
 SQUARE_RGB = {"R": (0.85, 0.15, 0.15), "G": (0.15, 0.7, 0.2), "B": (0.15, 0.3, 0.9),
-              "Y": (0.95, 0.85, 0.1), "C": (0.1, 0.85, 0.9), "M": (0.85, 0.2, 0.85)}
+              "Y": (0.95, 0.85, 0.1), "C": (0.1, 0.85, 0.9), "M": (0.85, 0.2, 0.85),
+              "W": (0.95, 0.95, 0.95), "K": (0.1, 0.1, 0.1)}
 
 #: the basic size-8 ω-tile set B, corners (TL, TR, BL, BR)
 BASIC_TILES = (
-    ("R", "G", "G", "B"), ("R", "G", "Y", "B"),
-    ("B", "Y", "Y", "R"), ("B", "Y", "G", "R"),
-    ("G", "B", "B", "Y"), ("G", "R", "B", "Y"),
-    ("Y", "B", "R", "G"), ("Y", "R", "R", "G"),
+    ("R", "G", "G", "B"), ("R", "B", "G", "Y"),
+    ("B", "Y", "Y", "R"), ("B", "R", "Y", "G"),
+    ("G", "B", "B", "Y"), ("G", "Y", "B", "R"),
+    ("Y", "G", "R", "B"), ("Y", "R", "R", "G"),
 )
+
+#: Ng et al. 2005's 16-tile set (their Fig. 8(a)), corners (TL, TR, BL, BR); B is a subset of it
+NG_16_TILES = tuple(tuple(t) for t in "RGGB RBGY RGBY RBBR GBBY GYBR GBYR GYYG "
+                                      "BYYR BRYG BYRG BRRB YRRG YGRB YRGB YGGY".split())
 
 
 @dataclass(frozen=True)
@@ -109,16 +136,23 @@ def extend(ts: TileSet, reference: str, new: str, name: str) -> TileSet:
 
 
 def tile_set(name: str) -> TileSet:
-    """``'B'`` (8 tiles), ``'N1'`` (adds C) or ``'N2'`` (adds M), Dong 2007 §5.3."""
+    """``'B'`` (8 tiles), ``'N1'`` (adds C), ``'N2'`` (adds M), Dong 2007 §5.3; ``'N3'`` (adds W for
+    G) and ``'N4'`` (adds K for B), the same rule applied further."""
     b = basic_set()
     if name == "B":
         return b
     n1 = extend(b, "Y", "C", "N1")
     if name == "N1":
         return n1
+    n2 = extend(n1, "R", "M", "N2")
     if name == "N2":
-        return extend(n1, "R", "M", "N2")
-    raise ValueError(f"unknown tile set {name!r}; expected B, N1 or N2")
+        return n2
+    n3 = extend(n2, "G", "W", "N3")
+    if name == "N3":
+        return n3
+    if name == "N4":
+        return extend(n3, "B", "K", "N4")
+    raise ValueError(f"unknown tile set {name!r}; expected B, N1, N2, N3 or N4")
 
 
 # ------------------------------------------------------------------------------------ completability
