@@ -10,8 +10,11 @@ For each parameter set (c_in, L_in, g, sigma_t, beta, L_amb, kappa_a) and pixel 
     L_cg = L_c e^{-kappa_a t_c} + (1 - e^{-kappa_a t_c}) L_sky                             (Eq. 3)
 
 with linear interpolation of the tables in sigma_t and g (bilinear for E_m^(k)); values outside a grid are
-clamped to its ends. The phase p(θ_q, g) is evaluated exactly (HG). Every interpolation is a sparse row of
-weights, so the whole population is a handful of (P x N) @ (N x H·W) products.
+clamped to its ends. The phase p(θ_q, g) is evaluated exactly (HG). Per individual, the interpolation is a
+gather of the 2 x 2 bracketing (g, sigma_t) slices and the orders a (K,) @ (K, N) product with the weights
+L_in beta^k w_g w_s: O(P · 4K · N) work, nothing proportional to the grid sizes. The GA's fast path
+(``pixels=``) composes only the N pixels it needs from a pixel-compressed copy of the tables,
+(Ng, Ns, K, N) float32, built once per pixel set and cached on the tables object.
 """
 from __future__ import annotations
 
@@ -21,6 +24,61 @@ from natscene.io import InputError
 from natscene.scatter.phase import INV_4PI
 
 PARAM_KEYS = ("c_in", "L_in", "g", "sigma_t", "beta", "L_amb", "kappa_a")
+
+
+try:  # a fused compiled kernel where numba is importable (it is a declared dependency); numpy otherwise
+    import numba as _nb
+except Exception:  # noqa: BLE001
+    _nb = None
+
+_KERNEL = None
+_CHUNK = 8192
+
+
+def _numba_kernel():
+    """Fused Eqs. 4, 5, 8, 9 per (individual, pixel chunk), parallel over both (compiled once, cached)."""
+    global _KERNEL
+    if _KERNEL is None:
+        @_nb.njit(parallel=True, cache=True, fastmath=True)
+        def kernel(s_sun, s_amb, s_T, mult, cos_t, sky, sidx, ws, gidx, wm, gpar, a_sun, l_amb, c_in, out):
+            P, N = out.shape[0], out.shape[1]
+            K = mult.shape[2]
+            nchunk = (N + _CHUNK - 1) // _CHUNK
+            for task in _nb.prange(P * nchunk):
+                j = task // nchunk
+                n0 = (task - j * nchunk) * _CHUNK
+                n1 = min(n0 + _CHUNK, N)
+                s0, s1 = sidx[j, 0], sidx[j, 1]
+                w0, w1 = ws[j, 0], ws[j, 1]
+                g = gpar[j]
+                c_ph = np.float32((1.0 - g * g) * 0.07957747154594767) * a_sun[j]
+                opg = np.float32(1.0 + g * g)
+                tg = np.float32(2.0 * g)
+                la = l_amb[j]
+                m = n1 - n0
+                acc = np.empty(m, np.float32)
+                for n in range(m):
+                    q = n0 + n
+                    d = opg - tg * cos_t[q]
+                    acc[n] = (c_ph / (d * np.sqrt(d)) * (w0 * s_sun[s0, q] + w1 * s_sun[s1, q])
+                              + la * (w0 * s_amb[s0, q] + w1 * s_amb[s1, q]))
+                for u in range(2):
+                    gi = gidx[j, u]
+                    for v in range(2):
+                        si = sidx[j, v]
+                        for k in range(K):
+                            w = wm[j, u, v, k]
+                            if w != 0:
+                                row = mult[gi, si, k]
+                                for n in range(m):
+                                    acc[n] += w * row[n0 + n]
+                for n in range(m):
+                    q = n0 + n
+                    t = w0 * s_T[s0, q] + w1 * s_T[s1, q]
+                    for c in range(3):
+                        out[j, q, c] = acc[n] * c_in[j, c] + t * sky[q, c]
+        _KERNEL = kernel
+    return _KERNEL
 
 
 def lerp_weights(grid, x) -> np.ndarray:
@@ -75,33 +133,163 @@ def _check_sky(tables, sky) -> np.ndarray:
     return s
 
 
-def compose_cloud(tables, params: dict, sky) -> np.ndarray:
-    """L_c (P, H, W, 3) of Eq. 4 (no atmosphere) for a population of parameter sets."""
-    sky = _check_sky(tables, sky)
-    P, p = population(params)
+def _bracket(grid: np.ndarray, x: float) -> tuple[int, float]:
+    """(i, f): x clamped to the grid lies between grid[i] and grid[i + 1] at fraction f (f = 0 on one node)."""
+    n = grid.size
+    if n == 1:
+        return 0, 0.0
+    xc = min(max(float(x), float(grid[0])), float(grid[-1]))
+    i = int(min(max(np.searchsorted(grid, xc, side="right") - 1, 0), n - 2))
+    return i, float((xc - grid[i]) / (grid[i + 1] - grid[i]))
+
+
+class PixelTables:
+    """The tables restricted to N pixels in a pixel-compressed layout for fast composition.
+
+    ``single`` (Ns, 3, N) = (S_sun, S_amb, T); ``multiple`` (Ng, Ns, K, N) so that the (g, sigma_t) bracket of
+    one individual is two contiguous (2, K, N) slices; ``cos_theta``, ``t_c`` (N,); ``index`` (N,) the flat
+    pixel indices into the H x W image.
+    """
+
+    def __init__(self, tables, index: np.ndarray):
+        H, W = tables.t_c.shape
+        self.index = index
+        self.shape = (H, W)
+        take = lambda a: np.asarray(a).reshape(a.shape[:-2] + (H * W,))[..., index]  # noqa: E731
+        self.single = np.ascontiguousarray(np.stack([take(tables.s_sun), take(tables.s_amb),
+                                                     take(tables.transmittance)], axis=1), np.float32)
+        m = take(tables.multiple)                                     # (K, Ng, Ns, N)
+        self.multiple = np.ascontiguousarray(np.moveaxis(m, 0, 2), np.float32)
+        self.cos_theta = np.ascontiguousarray(take(tables.cos_theta), np.float32)
+        self.t_c = np.ascontiguousarray(take(tables.t_c), np.float32)
+        self.nbytes = self.single.nbytes + self.multiple.nbytes
+
+
+def pixel_index(tables, pixels) -> np.ndarray:
+    """Flat pixel indices (N,) from a boolean (H, W) mask or an index array (flat, or (rows, cols))."""
     H, W = tables.t_c.shape
-    Ns, Ng = tables.sigma_t.size, tables.g.size
-    ws = lerp_weights(tables.sigma_t, p["sigma_t"])              # (P, Ns)
-    wg = lerp_weights(tables.g, p["g"])                          # (P, Ng)
-    s_sun = ws @ tables.s_sun.reshape(Ns, -1)                    # (P, HW)
-    s_amb = ws @ tables.s_amb.reshape(Ns, -1)
-    T = ws @ tables.transmittance.reshape(Ns, -1)
-    g = p["g"].astype(np.float32)[:, None]
-    cos_t = tables.cos_theta.reshape(1, -1)
-    denom = 1.0 + g * g - 2.0 * g * cos_t
-    phase = (1.0 - g * g) * np.float32(INV_4PI) / (denom * np.sqrt(denom))
-    L_in = p["L_in"].astype(np.float32)[:, None]
-    A = (L_in * p["beta"].astype(np.float32)[:, None]) * phase * s_sun
-    A += p["L_amb"].astype(np.float32)[:, None] * s_amb
-    K = len(tables.orders)
-    if K:
-        bk = p["beta"][:, None] ** np.asarray(tables.orders, np.float64)[None, :]          # (P, K)
-        wm = (bk[:, :, None, None] * wg[:, None, :, None] * ws[:, None, None, :]).astype(np.float32)
-        # one dense (P x K·Ng·Ns) @ (K·Ng·Ns x H·W) product: no gathers/copies of the big table
-        A += L_in * (wm.reshape(P, -1) @ tables.multiple.reshape(K * Ng * Ns, -1))
+    p = np.asarray(pixels)
+    if p.dtype == bool:
+        if p.shape != (H, W):
+            raise InputError(f"compose: pixel mask has shape {p.shape}, the tables are {W}x{H}")
+        return np.flatnonzero(p)
+    if p.ndim == 2 and p.shape[0] == 2 and p.shape[1] != W:    # (rows, cols)
+        p = p[0] * W + p[1]
+    p = p.reshape(-1).astype(np.int64)
+    if p.size and (p.min() < 0 or p.max() >= H * W):
+        raise InputError(f"compose: pixel indices must lie in [0, {H * W}), got [{p.min()}, {p.max()}]")
+    return p
+
+
+def pixel_tables(tables, pixels) -> PixelTables:
+    """The :class:`PixelTables` of ``pixels`` (cached on the tables object: a GA builds it once)."""
+    idx = pixel_index(tables, pixels)
+    cache = tables.__dict__.setdefault("_pixel_cache", {})
+    key = (idx.size, hash(idx.tobytes()))
+    pt = cache.get(key)
+    if pt is None:
+        if len(cache) >= 4:
+            cache.pop(next(iter(cache)))
+        pt = cache[key] = PixelTables(tables, idx)
+    return pt
+
+
+def _compose_numba(p, sig, gs, orders, arrays, cos_t, sky, P, N):
+    s_sun, s_amb, s_T, mult = arrays
+    K = orders.size
+    sidx = np.zeros((P, 2), np.int64)
+    gidx = np.zeros((P, 2), np.int64)
+    ws = np.zeros((P, 2), np.float32)
+    wm = np.zeros((P, 2, 2, max(K, 1)), np.float32)
+    for j in range(P):
+        si, fs = _bracket(sig, p["sigma_t"][j])
+        gi, fg = _bracket(gs, p["g"][j])
+        sidx[j] = (si, min(si + 1, sig.size - 1))
+        gidx[j] = (gi, min(gi + 1, gs.size - 1))
+        ws[j] = (1.0 - fs, fs)
+        if K:
+            bk = p["L_in"][j] * p["beta"][j] ** orders
+            wm[j] = (np.array([1.0 - fg, fg])[:, None, None] * np.array([1.0 - fs, fs])[None, :, None]
+                     * bk[None, None, :])
+    if K == 0:
+        mult = np.zeros((gs.size, sig.size, 1, N), np.float32)
+    out = np.empty((P, N, 3), np.float32)
+    _numba_kernel()(s_sun, s_amb, s_T, mult, np.asarray(cos_t, np.float32), np.ascontiguousarray(sky, np.float32),
+                    sidx, ws, gidx, wm, p["g"].astype(np.float32), (p["L_in"] * p["beta"]).astype(np.float32),
+                    p["L_amb"].astype(np.float32), p["c_in"].astype(np.float32), out)
+    return out
+
+
+def compose_cloud(tables, params: dict, sky, pixels=None, backend: str = "auto") -> np.ndarray:
+    """L_c of Eq. 4 (no atmosphere) for a population of parameter sets.
+
+    ``pixels=None``: the whole image, (P, H, W, 3). ``pixels``: a boolean (H, W) mask or flat pixel indices
+    (N,): only those pixels, (P, N, 3) in index order (the GA's fast path: the tables are re-laid out once
+    per pixel set as (Ng, Ns, K, N) and cached on ``tables``). ``sky``: (H, W, 3), or (N, 3) with ``pixels``.
+
+    Per individual the (sigma_t, g) bracket is a gather of at most 2 x 2 table slices and the orders a
+    weighted sum with beta^k (a (K,) @ (K, N) product per slice): the work is O(P · 4K · N), independent of
+    the grid sizes Ns, Ng. ``backend``: "auto" (a fused numba kernel when numba imports) or "numpy".
+    """
+    P, p = population(params)
+    sig = np.asarray(tables.sigma_t, np.float64)
+    gs = np.asarray(tables.g, np.float64)
+    orders = np.asarray(tables.orders, np.float64)
+    K = orders.size
+    H, W = tables.t_c.shape
+    if pixels is None:
+        sky = _check_sky(tables, sky).reshape(-1, 3)
+        N, Ns, Ng = H * W, sig.size, gs.size
+        single = (tables.s_sun.reshape(Ns, N), tables.s_amb.reshape(Ns, N), tables.transmittance.reshape(Ns, N))
+        M = tables.multiple.reshape(K, Ng, Ns, N)
+        cos_t = tables.cos_theta.reshape(N)
+        get_single = lambda i: (single[0][i], single[1][i], single[2][i])  # noqa: E731
+        get_mult = lambda gi, si: M[:, gi, si]                              # noqa: E731
+        get_arrays = lambda: (*single, np.moveaxis(M, 0, 2))                # noqa: E731
+    else:
+        pt = pixel_tables(tables, pixels)
+        N = pt.index.size
+        s = np.asarray(sky, np.float32)
+        if s.shape == (H, W, 3):
+            sky = s.reshape(-1, 3)[pt.index]
+        elif s.shape == (N, 3):
+            sky = s
+        else:
+            raise InputError(f"compose: sky has shape {s.shape}; expected the full ({H}, {W}, 3) image or the "
+                             f"selected pixels ({N}, 3) (results/sky/<photo>/{W}x{H}/sky.exr)")
+        cos_t = pt.cos_theta
+        get_single = lambda i: pt.single[i]              # noqa: E731
+        get_mult = lambda gi, si: pt.multiple[gi, si]    # noqa: E731
+        get_arrays = lambda: (pt.single[:, 0], pt.single[:, 1], pt.single[:, 2], pt.multiple)  # noqa: E731
+    if _nb is not None and backend != "numpy":
+        out = _compose_numba(p, sig, gs, orders, get_arrays(), cos_t, sky, P, N)
+        return out.reshape(P, H, W, 3) if pixels is None else out
+    A = np.empty((P, N), np.float32)
+    T = np.empty((P, N), np.float32)
+    for j in range(P):
+        si, fs = _bracket(sig, p["sigma_t"][j])
+        gi, fg = _bracket(gs, p["g"][j])
+        ws = [(si, 1.0 - fs)] + ([(si + 1, fs)] if fs > 0 else [])
+        wg = [(gi, 1.0 - fg)] + ([(gi + 1, fg)] if fg > 0 else [])
+        s_sun, s_amb, t = (np.float32(ws[0][1]) * x for x in get_single(ws[0][0]))
+        if len(ws) > 1:
+            s_sun, s_amb, t = (a + np.float32(ws[1][1]) * x for a, x in zip((s_sun, s_amb, t), get_single(ws[1][0])))
+        g, beta, L_in = float(p["g"][j]), float(p["beta"][j]), float(p["L_in"][j])
+        denom = np.float32(1.0 + g * g) - np.float32(2.0 * g) * cos_t
+        phase = np.float32((1.0 - g * g) * INV_4PI) / (denom * np.sqrt(denom))
+        a = np.float32(L_in * beta) * phase * s_sun
+        if p["L_amb"][j] != 0:
+            a += np.float32(p["L_amb"][j]) * s_amb
+        if K:
+            bk = L_in * beta ** orders
+            for g_i, w_g in wg:
+                for s_i, w_s in ws:
+                    a += (bk * (w_g * w_s)).astype(np.float32) @ get_mult(g_i, s_i)
+        A[j] = a
+        T[j] = t
     out = A[:, :, None] * p["c_in"].astype(np.float32)[:, None, :]
-    out += T[:, :, None] * sky.reshape(1, -1, 3)
-    return out.reshape(P, H, W, 3)
+    out += T[:, :, None] * sky[None]
+    return out.reshape(P, H, W, 3) if pixels is None else out
 
 
 def apply_atmosphere(L_c, t_c, kappa_a, sky) -> np.ndarray:
@@ -117,15 +305,22 @@ def apply_atmosphere(L_c, t_c, kappa_a, sky) -> np.ndarray:
     if k.ndim >= 1:
         if k.shape[-1] not in (1, 3):
             raise InputError(f"apply_atmosphere: kappa_a must end in 3 channels (or 1), got shape {k.shape}")
-        k = k[..., None, None, :]
+        k = k.reshape(k.shape[:-1] + (1,) * np.ndim(t_c) + k.shape[-1:])
     e = np.exp(-k * np.asarray(t_c, np.float32)[..., None])
     sky = np.asarray(sky, np.float32)
     return sky + (L_c - sky) * e
 
 
-def compose(tables, params: dict, sky) -> np.ndarray:
-    """L_cg (P, H, W, 3): :func:`compose_cloud` then :func:`apply_atmosphere` with each set's kappa_a."""
-    sky = _check_sky(tables, sky)
-    L_c = compose_cloud(tables, params, sky)
+def compose(tables, params: dict, sky, pixels=None) -> np.ndarray:
+    """L_cg: :func:`compose_cloud` then :func:`apply_atmosphere` with each set's kappa_a; (P, H, W, 3), or
+    (P, N, 3) for the selected ``pixels``."""
     _, p = population(params)
-    return apply_atmosphere(L_c, tables.t_c, p["kappa_a"], sky)
+    if pixels is None:
+        sky = _check_sky(tables, sky)
+        L_c = compose_cloud(tables, params, sky)
+        return apply_atmosphere(L_c, tables.t_c, p["kappa_a"], sky)
+    pt = pixel_tables(tables, pixels)
+    s = np.asarray(sky, np.float32)
+    sky_n = s.reshape(-1, 3)[pt.index] if s.ndim == 3 else s
+    L_c = compose_cloud(tables, params, sky_n, pixels=pt.index)
+    return apply_atmosphere(L_c, pt.t_c, p["kappa_a"], sky_n)
