@@ -23,10 +23,10 @@ def main(snakemake, log):
     tables = precompute(volume, camera, sun, sigmas=cfg["sigma_t"], gs=cfg["g"], n_m=cfg["n_m"], spp=cfg["spp"],
                         seed=cfg["seed"], step_voxels=cfg["step_voxels"], supersample=cfg["supersample"],
                         rho_threshold=cfg["rho_threshold"], batch_spp=cfg["batch_spp"], log=log.info)
-    out = Path(snakemake.output.meta).parent
+    out = Path(snakemake.output[0]).parent   # multiext outputs (cacheable rule): all in one folder
     meta = save_tables(out, tables, {"volume": snakemake.wildcards.volume, "view_name": snakemake.wildcards.view,
                                      "view": view, "variant": variant})
-    write_png(snakemake.output.contact_sheet, contact_sheet(tables), encoded=True)
+    write_png(out / "contact_sheet.png", contact_sheet(tables), encoded=True)
     log.info(f"done in {meta['timings']['total_s']:.1f} s; tables {meta['memory_bytes'] / 1e6:.1f} MB in memory, "
              f"{sum(meta['files_bytes'].values()) / 1e6:.1f} MB on disk; relative standard error "
              f"{meta.get('relative_standard_error')}")

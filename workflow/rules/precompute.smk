@@ -4,14 +4,13 @@ def _precompute_settings():
     return {k: v for k, v in config["precompute"].items() if k != "pairs"}
 
 
+# Between-workflow cache (DESIGN §4): `snakemake --cache precompute` with $SNAKEMAKE_OUTPUT_CACHE set reuses
+# the tables of another project with the same volume, view, settings and code; "omit-software" because the
+# code is already part of the hash through params.code. Snakemake's cache needs the outputs as one multiext.
 rule precompute:
     output:
-        single=f"{RESULTS}/precompute/{{volume}}/{{view}}/single.exr",
-        transmittance=f"{RESULTS}/precompute/{{volume}}/{{view}}/transmittance.exr",
-        multiple=f"{RESULTS}/precompute/{{volume}}/{{view}}/multiple.exr",
-        geometry=f"{RESULTS}/precompute/{{volume}}/{{view}}/geometry.exr",
-        meta=f"{RESULTS}/precompute/{{volume}}/{{view}}/meta.yaml",
-        contact_sheet=f"{RESULTS}/precompute/{{volume}}/{{view}}/contact_sheet.png",
+        multiext(f"{RESULTS}/precompute/{{volume}}/{{view}}/", "single.exr", "transmittance.exr", "multiple.exr",
+                 "geometry.exr", "meta.yaml", "contact_sheet.png"),
     input:
         density=f"{RESULTS}/volumes/{{volume}}/density.vol",
         volume_meta=f"{RESULTS}/volumes/{{volume}}/meta.yaml",
@@ -24,6 +23,7 @@ rule precompute:
     threads: config["threads"]
     resources:
         mem_mb=6000,
+    cache: "omit-software"
     script:
         str(ROOT / "scripts" / "precompute.py")
 
