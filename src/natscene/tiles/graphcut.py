@@ -26,6 +26,11 @@ merged with a small disc about the tile centre, where the four quarters meet, pi
 junction is always erased; the rest of the junction lines only where that lowers the seam energy);
 then, as in Kwatra's iterative refinement, the next-best matching patches are merged one by one
 (nothing pinned inside the circle) and each kept only if it lowers the total seam energy of the tile.
+Keeping the straight mid-line junction of the intermediate tile (pairs across the mid-lines that still
+hold their original quarters) is charged ``junction_weight`` times its seam price (default 3 in
+:func:`natscene.tiles.construct.construct`; clipped to E(A,B) + E(B,A) so the energy stays submodular):
+at equal Kwatra price a long straight line across the texture grain, repeated in every tile, is more
+visible than the curved seams around a patch, and §5.2 asks for the junctions to be erased.
 An earlier version forced a 2-pixel band along the mid-lines to the patch and priced seams on the
 intermediate tile as if it were one image; the cut then ran straight beside the band (visible straight
 seams along the tiles' mid-lines every tile size).
