@@ -284,6 +284,9 @@ def test_editing_one_keyframe_reruns_only_its_frames(tmp_path):
     mid = yaml.safe_load((workdir / targets[1]).read_text())
     assert mid["keyframes"] == [0, 3] and mid["params"]["L_in"] == pytest.approx(4.0 - 1.0 / 3.0)
     assert yaml.safe_load((workdir / targets[7]).read_text())["params"]["L_in"] == DUSK["L_in"]
+    at_key = yaml.safe_load((workdir / targets[3]).read_text())  # the middle keyframe, exactly
+    assert at_key["keyframes"] == [3] and at_key["params"]["L_in"] == 3.0
+    assert at_key["params"]["c_in"] == DAY["c_in"] and at_key["sun"]["elevation"] == 20
     assert _scheduled(_snake(repo, workdir, cfg, "-n", *targets)) == []
     # edit the middle keyframe (frame 3): frames 1..5 depend on it; 0, 6 and 7 do not
     cfg.write_text(yaml.safe_dump(_shot_config(2.0)))
