@@ -142,3 +142,16 @@ def test_sparse_final_equals_dense_final():
     dense = HybridImage(rgb, S, np.ones((4, 5), np.float32)).final()
     sparse = HybridImage(rgb, S, np.ones((4, 5), np.float32), mask=mask).final()
     np.testing.assert_allclose(sparse, dense, atol=1e-6)
+
+
+def test_upsampling_on_lookup_equals_per_texel_spectra():
+    """The reference renderer's two texture strategies agree (Mallett-Yuksel is linear)."""
+    from natscene.composite.full_spectral import UpsampleOnLookup, spectral_texture
+    from natscene.composite.scene import sample_texture
+    rng = np.random.default_rng(3)
+    tex = rng.random((16, 16, 3)).astype(np.float32)
+    uv = rng.random((50, 2)).astype(np.float32)
+    table = spectral_texture(tex, DEFAULT_GRID, "mallett2019", n_samples=10_000)
+    lazy = spectral_texture(tex, DEFAULT_GRID, "mallett2019", n_samples=10)
+    assert isinstance(lazy, UpsampleOnLookup) and isinstance(table, np.ndarray)
+    np.testing.assert_allclose(lazy.lookup(uv, 2.0), sample_texture(table, uv, 2.0), rtol=1e-4, atol=1e-6)

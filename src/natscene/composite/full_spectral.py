@@ -29,14 +29,38 @@ from natscene.spectral.grid import spectrum_to_rgb_matrix
 from natscene.spectral.upsampling import rgb_to_radiance, rgb_to_reflectance
 
 
+class UpsampleOnLookup:
+    """A texture with more texels than the render has samples: converting every texel up front would cost more
+    than converting each looked-up value, so the spectral renderer does the latter (bilinear RGB lookup, then
+    the upsampling; identical for the linear Mallett-Yuksel method, a close variant for Smits 1999)."""
+
+    def __init__(self, rgb: np.ndarray, grid, method: str):
+        self.rgb, self.grid, self.method = rgb, grid, method
+
+    def lookup(self, uv: np.ndarray, repeat: float = 1.0) -> np.ndarray:
+        from natscene.composite.scene import sample_texture
+        return rgb_to_reflectance(sample_texture(self.rgb, uv, repeat), self.grid, self.method).astype(np.float32)
+
+
+def spectral_texture(rgb: np.ndarray, grid, method: str, n_samples: int):
+    """Per-texel reflectance spectra (h, w, N) when the texture has at most ``n_samples`` texels, else
+    :class:`UpsampleOnLookup` (whichever is cheaper: the fair choice for the reference renderer)."""
+    if rgb.shape[0] * rgb.shape[1] <= n_samples:
+        return rgb_to_reflectance(rgb, grid, method).astype(np.float32)
+    return UpsampleOnLookup(rgb, grid, method)
+
+
 class SpectralInputs:
-    """Per-texel / per-pixel spectra of the set's RGB inputs (the spectral renderer's preprocessing)."""
+    """Spectra of the set's RGB inputs (the spectral renderer's preprocessing): per-texel reflectance spectra of
+    the textures (or upsampling on lookup for textures larger than the render, see :func:`spectral_texture`),
+    per-pixel radiance spectra of the plate, sky and highlight spectra."""
 
     def __init__(self, r: SetRenderer):
         spec = r.spec
         g, up = spec.grid, spec.upsampling
-        self.ground = rgb_to_reflectance(r.ground_rgb, g, up).astype(np.float32)
-        self.leaves = [rgb_to_reflectance(t, g, up).astype(np.float32) for t in r.leaf_rgb]
+        n = spec.camera.width * spec.camera.height * spec.spp
+        self.ground = spectral_texture(r.ground_rgb, g, up, n)
+        self.leaves = [spectral_texture(t, g, up, n) for t in r.leaf_rgb]
         self.plate = rgb_to_radiance(spec.background.reshape(-1, 3), g, up).astype(np.float32)
         self.zenith = rgb_to_radiance(np.asarray(spec.sky_zenith, np.float64), g, up).astype(np.float32)
         self.horizon = rgb_to_radiance(np.asarray(spec.sky_horizon, np.float64), g, up).astype(np.float32)

@@ -371,14 +371,25 @@ class SetRenderer:
     # -- materials
     def albedo(self, kind, index, uv, ground, leaves) -> np.ndarray:
         """Albedo of ground/leaf samples from per-texel tables (RGB here, spectra in the full mode)."""
-        out = np.zeros((kind.shape[0], ground.shape[-1]), np.float32)
+        def look(tex, uv_, repeat=1.0):
+            return tex.lookup(uv_, repeat) if hasattr(tex, "lookup") else sample_texture(tex, uv_, repeat)
+
+        out = None
         gr = kind == 0
         if gr.any():
-            out[gr] = sample_texture(ground, uv[gr], self.spec.ground_repeat)
+            v = look(ground, uv[gr], self.spec.ground_repeat)
+            out = np.zeros((kind.shape[0], v.shape[-1]), np.float32)
+            out[gr] = v
         for i, tex in enumerate(leaves):
             k = (kind == 1) & (index == i)
             if k.any():
-                out[k] = sample_texture(tex, uv[k])
+                v = look(tex, uv[k])
+                if out is None:
+                    out = np.zeros((kind.shape[0], v.shape[-1]), np.float32)
+                out[k] = v
+        if out is None:
+            c = ground.grid.size if hasattr(ground, "lookup") else ground.shape[-1]
+            out = np.zeros((kind.shape[0], c), np.float32)
         return out
 
     def lobe(self, ob: FilmObject, nh: np.ndarray, sun_cos: np.ndarray) -> np.ndarray:
