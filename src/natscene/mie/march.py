@@ -1,14 +1,18 @@
 """Final ray marching with the Mie/isotropic blend (Reimschuessel 2011, Ch. 3 "Final Rendering", Eqs. 6–8).
 
-The solved point cloud is resampled on its light-aligned lattice (the thesis' brickmap: a 3-D texture,
-trilinear lookups of Co, Ci, R_i, L_i) and every camera ray is marched through the volume with step
-``step_voxels`` voxels. At each sample:
+The solved point cloud is resampled on its light-aligned lattice (the thesis' brickmap: a 3-D texture
+of Co, R_i, L_i) with *normalised* trilinear lookups (the interpolated fields divided by the interpolated
+point indicator: only existing points count, so the cloud's surface is not darkened cell by cell), and
+every camera ray is marched through the volume with step ``step_voxels`` voxels. At each sample:
 
 - Eq. 6: ``A_m = Mie(acos(L_i · L_o))``, ``L_o`` the direction toward the camera, read from the table as
   ``4π p`` (1 = isotropic), averaged over the solid angle of a neighbour cell (L_i is a mean over
   neighbours, known to that resolution: see :func:`co_lut`). The direct-sunlight term uses the sun's
   propagation direction (= L_i before the passes, as in the input point cloud the thesis samples Ci
-  from) with the sharp table: glory, fogbow and the forward peak of the silver lining come from it;
+  from) with the sharp table: glory, fogbow and the forward peak of the silver lining come from it.
+  Its ``Ci = exp(-τ_sun)`` is looked up in the sun's optical depth on a finer light-aligned lattice
+  (``sun_step_voxels``, trilinear in τ: see :func:`sun_depth_lattice`), not in the points' Ci (two
+  voxels apart, the lit skin of a thick cloud is thinner than that: lattice-aligned stripes);
 - Eq. 7: ``A_d = exp(-ℓ_i σ_e)``, ℓ_i the density-weighted distance from the cloud surface along the
   view ray (the optical depth ∫ σ_e D dt; for a uniform cloud exactly the thesis' form);
 - Eq. 8: ``Λ_i = ([mie_scale A_m R_i + iso_scale (1 - R_i)] Co_i + mie_scale A_m(sun) Ci_i) A_d``;
@@ -40,15 +44,59 @@ def co_lut(table: PhaseTable) -> np.ndarray:
 
 
 def lattice_fields(sol: Solution) -> np.ndarray:
-    """(nc, nb, na, 8) float32 brickmap: Co (3), Ci (1), R (1), L (3) (0 where there is no point)."""
+    """(nc, nb, na, 8) float32 brickmap: Co (3), W (1), R (1), L (3); W = 1 at a point, 0 elsewhere.
+
+    The marcher interpolates all channels trilinearly and divides Co and R by the interpolated W
+    (normalised interpolation): only existing points contribute, so the cloud's surface, where the
+    lattice cells around a sample are partly empty, is not darkened cell by cell (the lattice-aligned
+    striping of a plain lookup with zeros)."""
     p = sol.points
     f = np.zeros(tuple(p.shape) + (8,), np.float32)
     c, b, a = p.index[:, 0], p.index[:, 1], p.index[:, 2]
     f[c, b, a, 0:3] = sol.co
-    f[c, b, a, 3] = p.ci0
+    f[c, b, a, 3] = 1.0
     f[c, b, a, 4] = sol.ratio
     f[c, b, a, 5:8] = sol.direction
     return f
+
+
+@njit(parallel=True, cache=True, fastmath=True)
+def _sun_depth(dens, vlo, vinv, origin, basis, h, sigma_e, out):
+    """Optical depth toward the sun at every node of a light-aligned lattice (trapezoid along w)."""
+    nc, nb, na = out.shape
+    for ba in prange(nb * na):
+        b = ba // na
+        a = ba % na
+        d1 = np.zeros(1)
+        tau = 0.0
+        prev = 0.0
+        for c in range(nc):
+            px = origin[0] + a * h * basis[0, 0] + b * h * basis[1, 0] + c * h * basis[2, 0]
+            py = origin[1] + a * h * basis[0, 1] + b * h * basis[1, 1] + c * h * basis[2, 1]
+            pz = origin[2] + a * h * basis[0, 2] + b * h * basis[1, 2] + c * h * basis[2, 2]
+            _tri(dens, (px - vlo[0]) * vinv - 0.5, (py - vlo[1]) * vinv - 0.5, (pz - vlo[2]) * vinv - 0.5, 1, d1)
+            cur = sigma_e * d1[0]
+            if c > 0:
+                tau += 0.5 * (prev + cur) * h
+            out[c, b, a] = tau
+            prev = cur
+
+
+def sun_depth_lattice(volume, points, step_voxels: float = 1.0):
+    """The sunlight's optical depth τ_sun on a light-aligned lattice of spacing ``step_voxels`` voxels
+    (origin and axes of the point cloud's lattice): ``Ci = exp(-τ_sun)`` is the direct sunlight of the
+    thesis' input point cloud, here known at every node (not only at points, and finer than the point
+    spacing) so that its trilinear lookup is smooth: τ varies linearly through the lit skin of the cloud,
+    where exp(-τ) falls by e per 1/σ_e (less than a lattice cell in thick clouds). -> (τ (nc, nb, na, 1),
+    spacing)."""
+    vs = float(np.min(volume.voxel_size))
+    h = float(step_voxels * vs)
+    ext = (np.asarray(points.shape, float) - 1) * points.spacing  # (c, b, a) extents
+    nc, nb, na = (int(np.ceil(e / h)) + 1 for e in ext)
+    out = np.zeros((nc, nb, na), np.float32)
+    _sun_depth(volume.density[..., None].astype(np.float32), np.asarray(volume.bbox_min, float), 1.0 / vs,
+               np.asarray(points.origin, float), np.asarray(points.basis, float), h, float(points.sigma_e), out)
+    return out[..., None], h
 
 
 @njit(cache=True, fastmath=True)
@@ -86,29 +134,29 @@ def _lut(lut, cos, out):
 
 
 @njit(parallel=True, cache=True, fastmath=True)
-def _march(origin, dirs, t0, t1, dens, vlo, vinv, fields, forigin, fbasis, finv, lut, lut_co, sun_w,
-           sigma_e, step, mie_scale, iso_scale, out_rad, out_T):
+def _march(origin, dirs, t0, t1, dens, vlo, vinv, fields, forigin, fbasis, finv, taus, tinv, lut, lut_co, sun_w,
+           sigma_e, step, mie_scale, iso_scale, out_rad, out_dir, out_T):
     npix = dirs.shape[0]
     for p in prange(npix):
-        out_rad[p, 0] = 0.0
-        out_rad[p, 1] = 0.0
-        out_rad[p, 2] = 0.0
+        for k in range(3):
+            out_rad[p, k] = 0.0
+            out_dir[p, k] = 0.0
         out_T[p] = 1.0
         if t1[p] <= t0[p]:
             continue
         dx, dy, dz = dirs[p, 0], dirs[p, 1], dirs[p, 2]
         buf = np.zeros(8)
         d1 = np.zeros(1)
+        ts = np.zeros(1)
         am = np.zeros(3)
         am_sun = np.zeros(3)
         _lut(lut, -(sun_w[0] * dx + sun_w[1] * dy + sun_w[2] * dz), am_sun)  # cos(w, -d)
         n = int(np.ceil((t1[p] - t0[p]) / step)) + 1
         tau = 0.0
-        prev = np.zeros(3)
+        prev = np.zeros(6)
+        cur = np.zeros(6)
+        acc = np.zeros(6)
         prev_sig = 0.0
-        acc0 = 0.0
-        acc1 = 0.0
-        acc2 = 0.0
         for k in range(n):
             t = min(t0[p] + k * step, t1[p])
             h = step if k > 0 else 0.0
@@ -120,46 +168,52 @@ def _march(origin, dirs, t0, t1, dens, vlo, vinv, fields, forigin, fbasis, finv,
             _tri(dens, (px - vlo[0]) * vinv - 0.5, (py - vlo[1]) * vinv - 0.5, (pz - vlo[2]) * vinv - 0.5, 1, d1)
             sig = sigma_e * d1[0]
             tau += 0.5 * (prev_sig + sig) * h  # trapezoid optical depth
-            cur0 = 0.0
-            cur1 = 0.0
-            cur2 = 0.0
+            for q in range(6):
+                cur[q] = 0.0
             if sig > 0:
                 qx, qy, qz = px - forigin[0], py - forigin[1], pz - forigin[2]
-                a = (qx * fbasis[0, 0] + qy * fbasis[0, 1] + qz * fbasis[0, 2]) * finv
-                b = (qx * fbasis[1, 0] + qy * fbasis[1, 1] + qz * fbasis[1, 2]) * finv
-                c = (qx * fbasis[2, 0] + qy * fbasis[2, 1] + qz * fbasis[2, 2]) * finv
-                _tri(fields, a, b, c, 8, buf)
-                lx, ly, lz = buf[5], buf[6], buf[7]
-                ln = np.sqrt(lx * lx + ly * ly + lz * lz)
-                if ln > 0:
-                    _lut(lut_co, -(lx * dx + ly * dy + lz * dz) / ln, am)
-                else:
-                    am[0] = 1.0
-                    am[1] = 1.0
-                    am[2] = 1.0
-                r = min(1.0, max(0.0, buf[4]))
+                la = qx * fbasis[0, 0] + qy * fbasis[0, 1] + qz * fbasis[0, 2]
+                lb = qx * fbasis[1, 0] + qy * fbasis[1, 1] + qz * fbasis[1, 2]
+                lc = qx * fbasis[2, 0] + qy * fbasis[2, 1] + qz * fbasis[2, 2]
                 a_d = np.exp(-tau)
                 w = sig * a_d / (4 * np.pi)
-                cur0 = ((mie_scale * am[0] * r + iso_scale * (1 - r)) * buf[0] + mie_scale * am_sun[0] * buf[3]) * w
-                cur1 = ((mie_scale * am[1] * r + iso_scale * (1 - r)) * buf[1] + mie_scale * am_sun[1] * buf[3]) * w
-                cur2 = ((mie_scale * am[2] * r + iso_scale * (1 - r)) * buf[2] + mie_scale * am_sun[2] * buf[3]) * w
+                # direct sunlight Ci = exp(-tau_sun) (fine lattice, trilinear in tau), sharp table
+                _tri(taus, la * tinv, lb * tinv, lc * tinv, 1, ts)
+                ci = np.exp(-ts[0])
+                for q in range(3):
+                    cur[3 + q] = mie_scale * am_sun[q] * ci * w
+                # scattered light Co, R, L: normalised trilinear interpolation of the points
+                _tri(fields, la * finv, lb * finv, lc * finv, 8, buf)
+                wt = buf[3]
+                if wt > 1e-6:
+                    lx, ly, lz = buf[5], buf[6], buf[7]
+                    ln = np.sqrt(lx * lx + ly * ly + lz * lz)
+                    if ln > 0:
+                        _lut(lut_co, -(lx * dx + ly * dy + lz * dz) / ln, am)
+                    else:
+                        am[0] = 1.0
+                        am[1] = 1.0
+                        am[2] = 1.0
+                    r = min(1.0, max(0.0, buf[4] / wt))
+                    for q in range(3):
+                        cur[q] = (mie_scale * am[q] * r + iso_scale * (1 - r)) * buf[q] / wt * w
             if k > 0:
-                acc0 += 0.5 * (prev[0] + cur0) * h
-                acc1 += 0.5 * (prev[1] + cur1) * h
-                acc2 += 0.5 * (prev[2] + cur2) * h
-            prev[0] = cur0
-            prev[1] = cur1
-            prev[2] = cur2
+                for q in range(6):
+                    acc[q] += 0.5 * (prev[q] + cur[q]) * h
+            for q in range(6):
+                prev[q] = cur[q]
             prev_sig = sig
-        out_rad[p, 0] = acc0
-        out_rad[p, 1] = acc1
-        out_rad[p, 2] = acc2
+        for q in range(3):
+            out_rad[p, q] = acc[q] + acc[3 + q]
+            out_dir[p, q] = acc[3 + q]
         out_T[p] = np.exp(-tau)
 
 
 def march_terms(volume, camera, solution: Solution, table: PhaseTable, mie_scale: float = 1.0,
-                iso_scale: float = 1.0, step_voxels: float = 1.0):
-    """(cloud radiance per unit sun (H, W, 3), transmittance T (H, W)) for one camera."""
+                iso_scale: float = 1.0, step_voxels: float = 1.0, sun_step_voxels: float = 1.0,
+                return_direct: bool = False):
+    """(cloud radiance per unit sun (H, W, 3), transmittance T (H, W)) for one camera; with
+    ``return_direct`` also the direct-sunlight (single scattering) part of the radiance (H, W, 3)."""
     dirs = camera.ray_directions().reshape(-1, 3)
     org = np.asarray(camera.position, np.float64)
     lo, hi = np.asarray(volume.bbox_min, float), np.asarray(volume.bbox_max, float)
@@ -167,33 +221,40 @@ def march_terms(volume, camera, solution: Solution, table: PhaseTable, mie_scale
     vs = float(np.min(volume.voxel_size))
     fields = lattice_fields(solution)
     p = solution.points
+    taus, h_tau = sun_depth_lattice(volume, p, sun_step_voxels)
     rad = np.zeros((len(dirs), 3))
+    direct = np.zeros((len(dirs), 3))
     T = np.ones(len(dirs))
     _march(org, np.ascontiguousarray(dirs), np.ascontiguousarray(t0, dtype=np.float64),
            np.ascontiguousarray(t1, dtype=np.float64), volume.density[..., None].astype(np.float32),
            lo, 1.0 / vs, fields, np.asarray(p.origin, float), np.asarray(p.basis, float), 1.0 / p.spacing,
-           table.lut().astype(np.float64), co_lut(table).astype(np.float64), -np.asarray(p.sun_dir, float), float(p.sigma_e),
-           step_voxels * vs, float(mie_scale), float(iso_scale), rad, T)
+           taus, 1.0 / h_tau, table.lut().astype(np.float64), co_lut(table).astype(np.float64),
+           -np.asarray(p.sun_dir, float), float(p.sigma_e), step_voxels * vs, float(mie_scale), float(iso_scale),
+           rad, direct, T)
     h, w = camera.height, camera.width
-    return rad.reshape(h, w, 3).astype(np.float32), T.reshape(h, w).astype(np.float32)
+    res = (rad.reshape(h, w, 3).astype(np.float32), T.reshape(h, w).astype(np.float32))
+    return res + (direct.reshape(h, w, 3).astype(np.float32),) if return_direct else res
 
 
 def render_mie(volume, camera, sun_dir, solution: Solution, table: PhaseTable, params: dict,
-               sky: np.ndarray | None = None) -> np.ndarray:
+               sky: np.ndarray | None = None, terms: dict | None = None) -> np.ndarray:
     """The Mie-blend shading of one view -> (H, W, 3) linear radiance.
 
     ``params``: ``c_in`` (3,) sun colour, ``L_in`` sun intensity, ``L_amb`` ambient intensity,
     optional ``mie_scale``, ``iso_scale`` (Table 4, default 1), ``sky_color`` (3,) (default: the mean of
     ``sky``), ``step_voxels`` (default 1). ``sky``: (H, W, 3) linear L_sky behind the cloud, or None.
     The solution must have been solved for ``sun_dir`` (the thesis' reuse: any view, any light colour).
+    ``terms``: a dict that receives ``direct`` (H, W, 3), the single-scattered sunlight part of the
+    radiance (where the glory and the fogbow live), and ``T`` (H, W).
     """
     sd = np.asarray(sun_dir, float) / np.linalg.norm(sun_dir)
     if float(np.dot(sd, solution.points.sun_dir)) < 1 - 1e-6:
         raise InputError("render_mie: the point-cloud solution was solved for another sun direction "
                          f"({np.round(solution.points.sun_dir, 4).tolist()} vs {np.round(sd, 4).tolist()}); "
                          "rerun rule point_scatter for this sun")
-    cloud, T = march_terms(volume, camera, solution, table, params.get("mie_scale", 1.0),
-                           params.get("iso_scale", 1.0), params.get("step_voxels", 1.0))
+    cloud, T, direct = march_terms(volume, camera, solution, table, params.get("mie_scale", 1.0),
+                                   params.get("iso_scale", 1.0), params.get("step_voxels", 1.0),
+                                   params.get("sun_step_voxels", 1.0), return_direct=True)
     h, w = camera.height, camera.width
     if sky is None:
         sky = np.zeros((h, w, 3), np.float32)
@@ -203,6 +264,9 @@ def render_mie(volume, camera, sun_dir, solution: Solution, table: PhaseTable, p
     c_in = np.broadcast_to(np.asarray(params.get("c_in", (1.0, 1.0, 1.0)), np.float32), (3,))
     sky_color = np.asarray(params["sky_color"], np.float32) if params.get("sky_color") is not None \
         else sky.reshape(-1, 3).mean(0)
+    if terms is not None:
+        terms["direct"] = (c_in * float(params.get("L_in", 1.0)) * direct).astype(np.float32)
+        terms["T"] = T
     out = c_in * float(params.get("L_in", 1.0)) * cloud \
         + float(params.get("L_amb", 0.0)) * sky_color * (1 - T)[..., None] + T[..., None] * sky
     return out.astype(np.float32)

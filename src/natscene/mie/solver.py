@@ -71,20 +71,38 @@ def neighbour_pairs(points: PointCloud, radius: float, min_attenuation: float):
     return i, j, (delta / dist[:, None]).astype(np.float32), dist, a_d.astype(np.float32)
 
 
-def cone_averaged_lut(table: PhaseTable, half_angle: float, n_theta: int = 3601, n_dirs: int = 400) -> np.ndarray:
+def cone_averaged_lut(table: PhaseTable, half_angle: float, n_theta: int = 3601, n_dirs: int | None = None) -> np.ndarray:
     """``A_m`` averaged over a cone of ``half_angle`` (rad) around each phase angle: (n_theta, 3) on a
     uniform θ grid 0..π. A receiving cell of side h at distance d subtends about h²/d² sr; sampling the
     forward peak (≈ 1° wide, ≈ 600/sr) at the cell's centre alone would send almost all light straight
-    along lattice axes, so the exchange uses the mean of the phase function over the cell's solid angle."""
-    k = np.arange(n_dirs) + 0.5
-    cos_a = 1 - (1 - np.cos(half_angle)) * k / n_dirs          # equal-area samples in the cone
-    phi = np.pi * (1 + 5 ** 0.5) * k
-    sin_a = np.sqrt(1 - cos_a**2)
+    along lattice axes, so the exchange uses the mean of the phase function over the cell's solid angle.
+
+    The mean is integrated exactly on the table's own (fine) angular grid, not sampled: for a cone of
+    half-angle α around an axis at angle θ from the light, the directions at angle θ' from the light
+    that fall inside the cone are the azimuths with ``cos θ cos θ' + sin θ sin θ' cos φ >= cos α``, a
+    fraction ``f = arccos((cos α - cos θ cos θ') / (sin θ sin θ')) / π`` of the circle, so
+    ``<p> = ∫ p(θ') f(θ, θ') 2π sin θ' dθ' / (2π (1 - cos α))``. (Sampling the cone with a few hundred
+    directions aliases the 1°-wide diffraction peak into ±50 % noise in θ, which the renderer shows as
+    speckle wherever L_i varies.) ``n_dirs`` is accepted for compatibility and ignored."""
     th = np.linspace(0, np.pi, n_theta)
-    # angle between sample direction (around axis at angle th from the light) and the light direction
-    cos_t = (np.cos(th)[:, None] * cos_a[None] - np.sin(th)[:, None] * sin_a[None] * np.cos(phi)[None])
-    ang = np.arccos(np.clip(cos_t, -1, 1))
-    out = np.stack([np.interp(ang, table.theta, table.rgb[:, c]).mean(axis=1) for c in range(3)], axis=-1)
+    tp = np.asarray(table.theta, np.float64)
+    # trapezoid weights of ∫ · sin θ' dθ' on the table grid
+    dt = np.diff(tp)
+    wq = np.zeros_like(tp)
+    wq[:-1] += 0.5 * dt
+    wq[1:] += 0.5 * dt
+    wq *= np.sin(tp)
+    ca = np.cos(half_angle)
+    out = np.empty((n_theta, 3), np.float64)
+    for lo in range(0, n_theta, 256):  # blocks of θ: (256, n_table) at a time
+        t = th[lo:lo + 256, None]
+        num = ca - np.cos(t) * np.cos(tp)[None]
+        den = np.sin(t) * np.sin(tp)[None]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            x = np.where(den > 1e-12, num / np.where(den > 1e-12, den, 1.0), np.where(num <= 0, -1.0, 2.0))
+        f = np.arccos(np.clip(x, -1.0, 1.0)) / np.pi  # x >= 1: outside the cone (0), x <= -1: whole circle (1)
+        kw = f * wq[None]
+        out[lo:lo + 256] = (kw @ table.rgb) * 2 * np.pi / (2 * np.pi * (1 - ca))
     return (out * 4 * np.pi).astype(np.float32)
 
 
