@@ -43,13 +43,15 @@ def co_lut(table: PhaseTable) -> np.ndarray:
     return cone_averaged_lut(table, float(np.arccos(1 - 1 / (2 * np.pi))))
 
 
-def lattice_fields(sol: Solution) -> np.ndarray:
+def lattice_fields(sol: Solution, smooth: float = 0.0) -> np.ndarray:
     """(nc, nb, na, 8) float32 brickmap: Co (3), W (1), R (1), L (3); W = 1 at a point, 0 elsewhere.
 
     The marcher interpolates all channels trilinearly and divides Co and R by the interpolated W
     (normalised interpolation): only existing points contribute, so the cloud's surface, where the
     lattice cells around a sample are partly empty, is not darkened cell by cell (the lattice-aligned
-    striping of a plain lookup with zeros)."""
+    striping of a plain lookup with zeros). ``smooth`` > 0 widens the kernel from trilinear to a
+    Gaussian of that many lattice spacings (Co, R, L of neighbouring points blended, W-weighted: the
+    point-to-point passes leave lattice-aligned texture in them; render default 1)."""
     p = sol.points
     f = np.zeros(tuple(p.shape) + (8,), np.float32)
     c, b, a = p.index[:, 0], p.index[:, 1], p.index[:, 2]
@@ -57,6 +59,9 @@ def lattice_fields(sol: Solution) -> np.ndarray:
     f[c, b, a, 3] = 1.0
     f[c, b, a, 4] = sol.ratio
     f[c, b, a, 5:8] = sol.direction
+    if smooth > 0:  # kernel-weighted: Gaussian of ``smooth`` lattice spacings over the points (W-weighted)
+        from scipy.ndimage import gaussian_filter
+        f = gaussian_filter(f, sigma=(smooth, smooth, smooth, 0), mode="constant", truncate=2.5)
     return f
 
 
@@ -211,7 +216,7 @@ def _march(origin, dirs, t0, t1, dens, vlo, vinv, fields, forigin, fbasis, finv,
 
 def march_terms(volume, camera, solution: Solution, table: PhaseTable, mie_scale: float = 1.0,
                 iso_scale: float = 1.0, step_voxels: float = 1.0, sun_step_voxels: float = 1.0,
-                return_direct: bool = False):
+                return_direct: bool = False, field_smooth: float = 1.0):
     """(cloud radiance per unit sun (H, W, 3), transmittance T (H, W)) for one camera; with
     ``return_direct`` also the direct-sunlight (single scattering) part of the radiance (H, W, 3)."""
     dirs = camera.ray_directions().reshape(-1, 3)
@@ -219,7 +224,7 @@ def march_terms(volume, camera, solution: Solution, table: PhaseTable, mie_scale
     lo, hi = np.asarray(volume.bbox_min, float), np.asarray(volume.bbox_max, float)
     t0, t1 = ray_box(np.broadcast_to(org, dirs.shape), dirs, lo, hi)
     vs = float(np.min(volume.voxel_size))
-    fields = lattice_fields(solution)
+    fields = lattice_fields(solution, field_smooth)
     p = solution.points
     taus, h_tau = sun_depth_lattice(volume, p, sun_step_voxels)
     rad = np.zeros((len(dirs), 3))
@@ -242,7 +247,7 @@ def render_mie(volume, camera, sun_dir, solution: Solution, table: PhaseTable, p
 
     ``params``: ``c_in`` (3,) sun colour, ``L_in`` sun intensity, ``L_amb`` ambient intensity,
     optional ``mie_scale``, ``iso_scale`` (Table 4, default 1), ``sky_color`` (3,) (default: the mean of
-    ``sky``), ``step_voxels`` (default 1). ``sky``: (H, W, 3) linear L_sky behind the cloud, or None.
+    ``sky``), ``step_voxels`` (default 1), ``sun_step_voxels`` (1), ``field_smooth`` (1). ``sky``: (H, W, 3) linear L_sky behind the cloud, or None.
     The solution must have been solved for ``sun_dir`` (the thesis' reuse: any view, any light colour).
     ``terms``: a dict that receives ``direct`` (H, W, 3), the single-scattered sunlight part of the
     radiance (where the glory and the fogbow live), and ``T`` (H, W).
@@ -254,7 +259,8 @@ def render_mie(volume, camera, sun_dir, solution: Solution, table: PhaseTable, p
                          "rerun rule point_scatter for this sun")
     cloud, T, direct = march_terms(volume, camera, solution, table, params.get("mie_scale", 1.0),
                                    params.get("iso_scale", 1.0), params.get("step_voxels", 1.0),
-                                   params.get("sun_step_voxels", 1.0), return_direct=True)
+                                   params.get("sun_step_voxels", 1.0), return_direct=True,
+                                   field_smooth=params.get("field_smooth", 1.0))
     h, w = camera.height, camera.width
     if sky is None:
         sky = np.zeros((h, w, 3), np.float32)
