@@ -29,9 +29,10 @@ rule fit:
     output:
         params=f"{RESULTS}/fit/{{keyframe}}/params.yaml",
         ranked=f"{RESULTS}/fit/{{keyframe}}/ranked.exr",
-        sheet=f"{RESULTS}/fit/{{keyframe}}/contact_sheet.png",
+        sheet=report(f"{RESULTS}/fit/{{keyframe}}/contact_sheet.png", category="Fit",
+                     caption="../report/fit_contact_sheet.rst"),
         csv=f"{RESULTS}/fit/{{keyframe}}/convergence.csv",
-        plot=f"{RESULTS}/fit/{{keyframe}}/convergence.png",
+        plot=report(f"{RESULTS}/fit/{{keyframe}}/convergence.png", category="Fit"),
     input:
         photo=lambda wc: _fit_sky(wc, "photo_linear"),
         mask=lambda wc: _fit_sky(wc, "cloud_mask"),

@@ -21,7 +21,8 @@ rule sky:
         mask=f"{RESULTS}/sky/{{photo}}/cloud_mask.exr",
         sky=f"{RESULTS}/sky/{{photo}}/sky.exr",
         sun=f"{RESULTS}/sky/{{photo}}/sun.yaml",
-        preview=f"{RESULTS}/sky/{{photo}}/preview.png",
+        preview=report(f"{RESULTS}/sky/{{photo}}/preview.png", category="Sky",
+                       caption="../report/sky_preview.rst"),
     input:
         photo=lambda wc: src(_photo(wc)["path"]),
         mask=lambda wc: [src(_photo(wc)["mask"])] if _photo(wc).get("mask") else [],

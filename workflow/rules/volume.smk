@@ -4,7 +4,8 @@ rule volume:
     output:
         density=f"{RESULTS}/volumes/{{volume}}/density.vol",
         preview_exr=f"{RESULTS}/volumes/{{volume}}/preview.exr",
-        preview_png=f"{RESULTS}/volumes/{{volume}}/preview.png",
+        preview_png=report(f"{RESULTS}/volumes/{{volume}}/preview.png", category="Volumes",
+                           caption="../report/volume_preview.rst"),
         meta=f"{RESULTS}/volumes/{{volume}}/meta.yaml",
     input:
         lambda wc: [src(config["volumes"][wc.volume]["path"])] if config["volumes"][wc.volume]["kind"] == "file" else [],
