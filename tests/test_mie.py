@@ -184,3 +184,28 @@ def test_glory_view_shows_mie_backscatter_colours(table, sphere_solution):
     hg = hg_table(float(table.g[1]))
     img_hg = render_mie(vol, cam, sun, solve(pts, hg, passes=0), hg, {"L_in": 1.0, "L_amb": 0.0})[2, 2]
     assert np.allclose(img_hg / img_hg[1], 1.0, atol=1e-5)
+
+
+def test_per_sun_cache_reused_and_never_stale(table, sphere_solution):
+    # the per-sun fields are computed once per solution and reused for other views; a frame with the
+    # cache warm equals one with a fresh cache, and another volume or table is not served stale entries
+    from dataclasses import replace
+
+    from natscene.mie.march import per_sun_fields
+    vol, sun, pts, sol, _ = sphere_solution
+    sol = replace(sol, cache={})
+    cam = Camera((0.0, 0.5, -2.5), (0.0, 0.5, 0.0), (0, 1, 0), 30.0, 16, 12)
+    cam2 = Camera((0.3, 0.9, -2.4), (0.0, 0.5, 0.0), (0, 1, 0), 25.0, 12, 10)
+    params = {"L_in": 1.0, "L_amb": 0.1, "sky_color": [0.2, 0.3, 0.6]}
+    a = render_mie(vol, cam, sun, sol, table, params)
+    first = per_sun_fields(vol, sol, table)
+    render_mie(vol, cam2, sun, sol, table, params)
+    assert all(x is y for x, y in zip(per_sun_fields(vol, sol, table), first))  # reused, not recomputed
+    assert np.array_equal(render_mie(vol, cam, sun, sol, table, params),
+                          render_mie(vol, cam, sun, replace(sol, cache={}), table, params))
+    assert np.array_equal(a, render_mie(vol, cam, sun, sol, table, params))
+    thin = Volume(vol.density * 0.5, vol.bbox_min, vol.bbox_max, vol.extinction_scale)
+    assert np.array_equal(render_mie(thin, cam, sun, sol, table, params),
+                          render_mie(thin, cam, sun, replace(sol, cache={}), table, params))
+    hg = hg_table(float(table.g[1]))
+    assert per_sun_fields(vol, sol, hg)[2] is not first[2]

@@ -214,6 +214,31 @@ def _march(origin, dirs, t0, t1, dens, vlo, vinv, fields, forigin, fbasis, finv,
         out_T[p] = np.exp(-tau)
 
 
+def per_sun_fields(volume, solution: Solution, table: PhaseTable, field_smooth: float = 1.0,
+                   sun_step_voxels: float = 1.0):
+    """The final pass's per-sun inputs, cached on ``solution.cache`` (the thesis' reuse: they depend on the
+    volume, the sun and the solution, not on the view or the light colour): the brickmap fields
+    (:func:`lattice_fields`), the sun's optical-depth lattice (:func:`sun_depth_lattice`) and the
+    cone-averaged LUT of the Co term (:func:`co_lut`). Entries are keyed by their settings and hold a
+    reference to the volume's density / the table they were made from, so another volume or table is
+    never served a stale entry. -> (fields, (τ, spacing), lut_co)."""
+    c = solution.cache
+    key = ("fields", float(field_smooth))
+    if key not in c:
+        c[key] = lattice_fields(solution, field_smooth)
+    fields = c[key]
+    key = ("tau", float(sun_step_voxels))
+    e = c.get(key)
+    if e is None or e[0] is not volume.density or not np.array_equal(e[1], np.r_[volume.bbox_min, volume.bbox_max]):
+        e = c[key] = (volume.density, np.r_[volume.bbox_min, volume.bbox_max],
+                      sun_depth_lattice(volume, solution.points, sun_step_voxels))
+    taus = e[2]
+    e = c.get("lut_co")
+    if e is None or e[0] is not table:
+        e = c["lut_co"] = (table, co_lut(table).astype(np.float64))
+    return fields, taus, e[1]
+
+
 def march_terms(volume, camera, solution: Solution, table: PhaseTable, mie_scale: float = 1.0,
                 iso_scale: float = 1.0, step_voxels: float = 1.0, sun_step_voxels: float = 1.0,
                 return_direct: bool = False, field_smooth: float = 1.0):
@@ -224,16 +249,15 @@ def march_terms(volume, camera, solution: Solution, table: PhaseTable, mie_scale
     lo, hi = np.asarray(volume.bbox_min, float), np.asarray(volume.bbox_max, float)
     t0, t1 = ray_box(np.broadcast_to(org, dirs.shape), dirs, lo, hi)
     vs = float(np.min(volume.voxel_size))
-    fields = lattice_fields(solution, field_smooth)
+    fields, (taus, h_tau), lut_co = per_sun_fields(volume, solution, table, field_smooth, sun_step_voxels)
     p = solution.points
-    taus, h_tau = sun_depth_lattice(volume, p, sun_step_voxels)
     rad = np.zeros((len(dirs), 3))
     direct = np.zeros((len(dirs), 3))
     T = np.ones(len(dirs))
     _march(org, np.ascontiguousarray(dirs), np.ascontiguousarray(t0, dtype=np.float64),
            np.ascontiguousarray(t1, dtype=np.float64), volume.density[..., None].astype(np.float32),
            lo, 1.0 / vs, fields, np.asarray(p.origin, float), np.asarray(p.basis, float), 1.0 / p.spacing,
-           taus, 1.0 / h_tau, table.lut().astype(np.float64), co_lut(table).astype(np.float64),
+           taus, 1.0 / h_tau, table.lut().astype(np.float64), lut_co,
            -np.asarray(p.sun_dir, float), float(p.sigma_e), step_voxels * vs, float(mie_scale), float(iso_scale),
            rad, direct, T)
     h, w = camera.height, camera.width

@@ -55,6 +55,9 @@ class Solution:
     energy: np.ndarray         # (passes + 1, 3) Σ h² s_i Ci_i per pass (pass 0: direct sunlight)
     passes: int
     params: dict = field(default_factory=dict)
+    # per-sun quantities derived by the final pass (brickmap fields, the sun's optical-depth lattice,
+    # the cone-averaged LUT): computed on the first frame and reused by every later frame of this sun
+    cache: dict = field(default_factory=dict, repr=False, compare=False)
 
 
 def neighbour_pairs(points: PointCloud, radius: float, min_attenuation: float):
