@@ -25,9 +25,12 @@ def main(snakemake, log):
     b = construct(example, ts, s, params, seed=int(spec["seed"]), margin=float(spec["margin"]),
                   core=float(seams["core"]), normalise=float(seams["normalise"]),
                   junction_weight=float(seams["junction_weight"]), candidates=int(seams["candidates"]),
-                  passes=int(seams["passes"]))
+                  passes=int(seams["passes"]), region=str(seams["region"]),
+                  anisotropic=bool(seams["anisotropic"]), blend=str(seams["blend"]))
     log.info(f"seams: energy {b.seam_costs.sum():.1f} over {ts.m} tiles, "
              f"{np.mean([len(v) for v in b.extra['sources']]):.1f} merged sources per tile")
+    if b.extra["axis_weights"]:
+        log.info(f"seam weights per direction: {b.extra['axis_weights']}")
     log.info(f"GA: E {b.ga.initial_best_E:.2f} (best initial) -> {b.ga.E:.2f} after "
              f"{len(b.ga.log) - 1} generations, {b.ga.evaluations} evaluations")
     tiles = b.tiles

@@ -11,7 +11,8 @@ from natscene.config import ConfigError, load_yaml_config, validate_config
 from natscene.tiles.construct import construct, from_atlas, intermediate_tiles, to_atlas
 from natscene.tiles.embed import embed, grabcut_object
 from natscene.tiles.genetic import GAParams, MatchCost, evaluation, quarter_layout, run_ga
-from natscene.tiles.graphcut import (_tables, array_pair_values, build_tile, constraint_masks,
+from natscene.tiles.blend import poisson_blend
+from natscene.tiles.graphcut import (_tables, array_pair_values, axis_weights, build_tile, constraint_masks,
                                      intermediate_offsets, junction_extensions, merge, render,
                                      seam_energy, tile_energy)
 from natscene.tiles.omega import (NG_16_TILES, _from_tuples, basic_set, build_lookup, dead_ends, extend,
@@ -325,6 +326,75 @@ def test_synthesised_texture_has_no_visible_seams(name):
     rand_tiles = np.stack([ex[y:y + s, x:x + s] for y, x in pos])
     naive_tex = gather_texture(rand_tiles, np.arange(100).reshape(10, 10))[..., 0]
     assert border < 0.5 * _line_msd(naive_tex, s, 0)
+
+
+# ------------------------------------------------------------------------------------------ blending
+def test_poisson_blend_removes_a_constant_step_and_keeps_the_border():
+    """Example whose right half is its left half + 0.3: a tile from the left half with a disc from the
+    right half has the same guidance everywhere as the left-half tile alone, so the Poisson solution
+    with the border band fixed is exactly the left-half tile (the 0.3 step is gone); a single-source
+    tile comes back unchanged."""
+    rng = np.random.default_rng(4)
+    left = rng.random((40, 40, 3))
+    ex = np.concatenate([left, left + 0.3], 1)
+    s = 32
+    yy, xx = np.mgrid[0:s, 0:s]
+    off = np.zeros((s, s, 2), np.int64) + [3, 4]
+    disc = (yy - 14) ** 2 + (xx - 17) ** 2 < 8 ** 2
+    off[disc, 1] += 40
+    keep, _ = constraint_masks(s, 1.0, None, "square")
+    assert keep.sum() == 4 * s - 4 and not keep[1:-1, 1:-1].any()
+    plain = render(ex, off)
+    assert np.ptp(plain[disc] - left[3:3 + s, 4:4 + s][disc]) < 1e-12       # raw: a 0.3 step
+    out = poisson_blend(ex, off, keep)
+    assert np.allclose(out, left[3:3 + s, 4:4 + s], atol=1e-9)
+    assert np.array_equal(out[keep], plain[keep])
+    one = np.zeros((s, s, 2), np.int64) + [5, 41]
+    assert np.allclose(poisson_blend(ex, one, keep), render(ex, one), atol=1e-9)
+
+
+def test_axis_weights_price_seams_across_the_grain():
+    """Vertical stripes vary along x only: a horizontal seam (pairs along y, axis 0) crosses the
+    stripes' smooth direction and costs more; transposing swaps the weights; isotropic noise ~ 1."""
+    rng = np.random.default_rng(5)
+    stripes = np.repeat(rng.random((1, 64, 1)), 64, 0) + 0.01 * rng.random((64, 64, 1))
+    w = axis_weights(stripes)
+    assert w[0] > 10 * w[1] and 0.5 * (1 / w[0] + 1 / w[1]) == pytest.approx(1.0)
+    wt = axis_weights(stripes.transpose(1, 0, 2))
+    assert wt[1] == pytest.approx(w[0]) and wt[0] == pytest.approx(w[1])
+    wn = axis_weights(rng.random((128, 128, 3)))
+    assert wn[0] == pytest.approx(1.0, abs=0.03) and wn[1] == pytest.approx(1.0, abs=0.03)
+    # the bundled grass (upright blades): horizontal seams cost ~3x vertical ones
+    from natscene.color import linear_to_srgb
+    from natscene.io import read_photo
+    g = axis_weights(linear_to_srgb(read_photo(ROOT / "resources/textures/grass_meadow_128.png")))
+    assert g[0] > 2.5 * g[1]
+
+
+def test_square_region_anisotropic_poisson_build_keeps_edges_and_hides_seams():
+    """The pipeline's settings (square region, direction weights, Poisson blending) on an anisotropic
+    texture (the brick crop varies ~2.4x more along x than along y): tile borders stay the sample patches' (tilings stay seamless
+    across tiles), and the mid-line MSD is within the spread of the other interior lines and far below
+    the intermediate tiles'."""
+    ex = _example("brick", 96)
+    s, h = 48, 24
+    b = construct(ex, tile_set("N1"), s, GAParams(pop_size=12, n_g=6, n_o=3), seed=2, region="square",
+                  anisotropic=True, blend="poisson")
+    keep = b.extra["keep"]
+    assert keep.sum() == 4 * s - 4
+    assert np.array_equal(b.tiles[:, keep], b.intermediate[:, keep])
+    assert not np.array_equal(b.tiles[:, ~keep], b.intermediate[:, ~keep])
+    dx, dy = np.abs(np.diff(ex, axis=1)).mean(), np.abs(np.diff(ex, axis=0)).mean()
+    assert dx > 2 * dy and b.extra["axis_weights"][0] > 2 * b.extra["axis_weights"][1]   # this crop: x-varying
+    grid = scanline_tiling(b.tileset, 10, 10, seed=3)
+    tex = gather_texture(b.tiles, grid)[..., 0]
+    others = [_line_msd(tex, s, o) for o in range(1, s) if abs(o - h) > 3]
+    mid = _line_msd(tex, s, h)
+    raw = _line_msd(gather_texture(b.intermediate, grid)[..., 0], s, h)
+    assert mid <= max(others), (mid / np.mean(others), max(others) / np.mean(others))
+    assert mid < 0.4 * raw, (mid, raw)
+    with pytest.raises(ValueError):
+        construct(ex, tile_set("B"), s, GAParams(pop_size=4, n_g=1, n_o=1), blend="feather")
 
 
 # ------------------------------------------------------------------------------------------ embedment

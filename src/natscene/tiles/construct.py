@@ -14,9 +14,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from natscene.color import linear_to_srgb
+from natscene.color import linear_to_srgb, srgb_to_linear
 from natscene.tiles.genetic import GAParams, GAResult, MatchCost, quarter_layout, run_ga
-from natscene.tiles.graphcut import build_tile, intermediate_offsets, render
+from natscene.tiles.blend import poisson_blend
+from natscene.tiles.graphcut import axis_weights, build_tile, constraint_masks, intermediate_offsets, render
 from natscene.tiles.omega import TileSet
 
 
@@ -65,13 +66,20 @@ def candidate_patches(cost: MatchCost, genes: np.ndarray, ts: TileSet, j: int, k
 
 def construct(example_linear: np.ndarray, ts: TileSet, tile_size: int, params: GAParams | None = None,
               seed: int = 0, margin: float = 1.0, core: float = 2.0, normalise: float = 0.0,
-              junction_weight: float = 3.0, candidates: int = 8, passes: int = 3) -> TileSetBuild:
+              junction_weight: float = 3.0, candidates: int = 8, passes: int = 3,
+              region: str = "circle", anisotropic: bool = False, blend: str = "none") -> TileSetBuild:
     """Build the ω-tile set ``ts`` from a linear example image (H, W, C).
 
-    ``margin``, ``core``, ``normalise``, ``junction_weight``, ``passes``: the graph-cut settings of
-    :func:`natscene.tiles.graphcut.build_tile`; ``candidates``: how many best matching patches are
-    tried (the first is Dong's matching patch, merged with the centre pinned); the tile's own four
-    sample patches, continued past their quarters, are tried after the first."""
+    ``margin``, ``core``, ``normalise``, ``junction_weight``, ``passes``, ``region``: the graph-cut
+    settings of :func:`natscene.tiles.graphcut.build_tile`; ``anisotropic``: seam prices weighted per
+    direction by :func:`natscene.tiles.graphcut.axis_weights` of the example; ``candidates``: how many
+    best matching patches are tried (the first is Dong's matching patch, merged with the centre
+    pinned); the tile's own four sample patches, continued past their quarters, are tried after the
+    first. ``blend="poisson"``: each merged tile is then blended in the gradient domain
+    (:func:`natscene.tiles.blend.poisson_blend`, on display-encoded values) with its pinned border
+    band fixed, which spreads the seams' remaining intensity steps."""
+    if blend not in ("none", "poisson"):
+        raise ValueError(f"blend must be 'none' or 'poisson', got {blend!r}")
     lin = np.asarray(example_linear, np.float32)
     if lin.ndim == 2:
         lin = lin[..., None]
@@ -86,6 +94,8 @@ def construct(example_linear: np.ndarray, ts: TileSet, tile_size: int, params: G
     masks = np.zeros((ts.m, s, s), bool)
     costs = np.zeros(ts.m)
     sources = []
+    aw = axis_weights(enc) if anisotropic else None
+    keep_a = constraint_masks(s, margin, core, region)[0]
     for j in range(ts.m):
         off0 = intermediate_offsets(ga.genes, ts.tiles[j], s)
         best = [tuple(int(v) for v in ga.matches[j])]
@@ -95,11 +105,15 @@ def construct(example_linear: np.ndarray, ts: TileSet, tile_size: int, params: G
                                       for y, x in ((0, 0), (0, s - 1), (s - 1, 0), (s - 1, s - 1))))
         cands = best + quarters + more[:max(int(candidates) - 1, 0)]
         off, changed, costs[j], accepted = build_tile(enc, off0, cands, margin, core, normalise, passes,
-                                                      junction_weight)
+                                                      junction_weight, region, aw)
         tiles[j] = render(lin, off)
+        if blend == "poisson":
+            t = srgb_to_linear(np.clip(poisson_blend(enc, off, keep_a), 0.0, 1.0))
+            tiles[j] = np.where(keep_a[..., None], tiles[j], t)
         masks[j] = changed
         sources.append(accepted)
-    return TileSetBuild(tiles, inter_lin, masks, costs, ga, ts, s, {"sources": sources})
+    return TileSetBuild(tiles, inter_lin, masks, costs, ga, ts, s,
+                        {"sources": sources, "axis_weights": aw, "keep": keep_a})
 
 
 def atlas_layout(m: int) -> tuple[int, int]:

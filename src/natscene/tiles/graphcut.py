@@ -49,15 +49,23 @@ INF = 1e12
 UNKNOWN = 2.0 * np.sqrt(3.0)     # cost of one term whose continued source lies outside the example
 
 
-def constraint_masks(s: int, margin: float = 1.0, core: float = 2.0):
-    """(keep_tile, keep_patch) boolean masks (s, s): outside the circle of radius s/2 - margin, and
-    the disc of radius ``core`` pixels about the tile centre (where the four quarters meet; at least the
-    central 2x2 pixels; ``core=None``: nothing)."""
+def constraint_masks(s: int, margin: float = 1.0, core: float = 2.0, region: str = "circle"):
+    """(keep_tile, keep_patch) boolean masks (s, s): outside the free region, and the disc of radius
+    ``core`` pixels about the tile centre (where the four quarters meet; at least the central 2x2
+    pixels; ``core=None``: nothing). ``region="circle"``: the circle of radius s/2 - margin (§5.2);
+    ``"square"``: everything but a band of ceil(margin) (at least 1) pixels along the tile border (the
+    border pixels stay those of the sample patches, which is all the edge constraints need)."""
     yy, xx = np.mgrid[0:s, 0:s]
     c = (s - 1) / 2.0
     d2 = (yy - c) ** 2 + (xx - c) ** 2
-    r = s / 2.0 - float(margin)
-    inside = d2 <= r * r
+    if region == "square":
+        b = max(int(np.ceil(float(margin))), 1)
+        inside = (yy >= b) & (yy < s - b) & (xx >= b) & (xx < s - b)
+    elif region == "circle":
+        r = s / 2.0 - float(margin)
+        inside = d2 <= r * r
+    else:
+        raise ValueError(f"region must be 'circle' or 'square', got {region!r}")
     if core is None:
         return ~inside, np.zeros((s, s), bool)
     centre = d2 <= max(float(core), 0.75) ** 2
@@ -120,15 +128,37 @@ def _dist(a, b):
     return np.where(np.isfinite(d), d, UNKNOWN)
 
 
-def _tables(values, B, normalise: float = 0.0, junction=None, junction_weight: float = 1.0):
+def axis_weights(example: np.ndarray) -> dict:
+    """{axis: w}: the seam price across ``axis`` is multiplied by w = mean / mean_axis, where mean_axis
+    is the example's mean neighbour difference |X(q) - X(p)| along that axis and mean the average of
+    the two (Kwatra et al. 2003's gradient normalisation with the directional gradient averaged over the
+    example instead of taken locally). A step across a direction in which the texture hardly varies
+    (across the blades of upright grass: horizontal seams) is more visible than one of the same size
+    across a direction of strong variation; isotropic textures get w = 1 on both axes."""
+    ex = np.asarray(example, np.float64)
+    if ex.ndim == 2:
+        ex = ex[..., None]
+    m = {1: float(np.sqrt(((ex[:, 1:] - ex[:, :-1]) ** 2).sum(-1)).mean()),
+         0: float(np.sqrt(((ex[1:] - ex[:-1]) ** 2).sum(-1)).mean())}
+    mean = 0.5 * (m[0] + m[1])
+    if mean <= 0:
+        return {0: 1.0, 1: 1.0}
+    return {a: mean / max(v, 1e-3 * mean) for a, v in m.items()}
+
+
+def _tables(values, B, normalise: float = 0.0, junction=None, junction_weight: float = 1.0,
+            axis_weight=None):
     """Pair energies {axis: (E_AA, E_AB, E_BA)} (E_BB = 0) from :func:`_pair_values`-like ``values`` and
-    the candidate patch B (s, s, C)."""
+    the candidate patch B (s, s, C); ``axis_weight``: {axis: factor} of :func:`axis_weights`."""
     out, dens = {}, {}
     for axis, (Ap, Aq, Xp_q, Xq_p) in values.items():
         Bp, Bq = _split(B, axis)
         e_ab = _dist(Ap, Bp) + _dist(Xp_q, Bq)
         e_ba = _dist(Bp, Xq_p) + _dist(Bq, Aq)
         e_aa = _dist(Ap, Xq_p) + _dist(Xp_q, Aq)
+        if axis_weight is not None:
+            w = float(axis_weight[axis])
+            e_ab, e_ba, e_aa = w * e_ab, w * e_ba, w * e_aa
         if junction is not None and junction_weight != 1.0:
             e_aa = np.where(junction[axis], junction_weight * e_aa, e_aa)
         e_aa = np.minimum(e_aa, e_ab + e_ba)     # unchanged unless UNKNOWN or weighted
@@ -198,7 +228,8 @@ def junction_pairs(offsets: np.ndarray, original: np.ndarray):
 
 
 def merge_offsets(example: np.ndarray, offsets: np.ndarray, patch_yx, keep_a: np.ndarray,
-                  pin_b: np.ndarray, normalise: float = 0.0, junction=None, junction_weight: float = 1.0):
+                  pin_b: np.ndarray, normalise: float = 0.0, junction=None, junction_weight: float = 1.0,
+                  axis_weight=None):
     """One graph-cut merge of the matching patch at ``patch_yx`` (its top-left in the example) into the
     tile given by its source map. Returns (new offsets, mask True where the patch is used, energy)."""
     ex = np.asarray(example, np.float64)
@@ -208,31 +239,33 @@ def merge_offsets(example: np.ndarray, offsets: np.ndarray, patch_yx, keep_a: np
     outside = ~np.isfinite(B).all(-1)            # a source continued past the example: not usable
     if (outside & pin_b).any():
         raise ValueError(f"matching patch at {patch_yx} does not cover the pinned centre")
-    tables = _tables(_pair_values(ex, offsets), B, normalise, junction, junction_weight)
+    tables = _tables(_pair_values(ex, offsets), B, normalise, junction, junction_weight, axis_weight)
     use_b = _cut(tables, keep_a | outside, pin_b)
     new = np.where(use_b[..., None], np.array([ty, tx]), offsets)
     return new, use_b, seam_energy(tables, use_b)
 
 
-def tile_energy(example: np.ndarray, offsets: np.ndarray, normalise: float = 0.0) -> float:
+def tile_energy(example: np.ndarray, offsets: np.ndarray, normalise: float = 0.0, axis_weight=None) -> float:
     """Total seam energy of a source map (sum of E(A,A) over all pairs), normalised the same way as
     a merge would with B = the tile itself."""
     ex = np.asarray(example, np.float64)
     vals = _pair_values(ex, offsets)
-    tables = _tables(vals, render(ex, offsets), normalise)
+    tables = _tables(vals, render(ex, offsets), normalise, axis_weight=axis_weight)
     return seam_energy(tables, np.zeros(offsets.shape[:2], bool))
 
 
 def build_tile(example: np.ndarray, offsets: np.ndarray, candidates, margin: float = 1.0,
-               core: float = 2.0, normalise: float = 0.0, passes: int = 1, junction_weight: float = 1.0):
+               core: float = 2.0, normalise: float = 0.0, passes: int = 1, junction_weight: float = 1.0,
+               region: str = "circle", axis_weight=None):
     """§5.2 junction removal on a source map: merge ``candidates[0]`` (the best matching patch) with the
     centre disc pinned, then each further candidate patch if it lowers the tile's seam energy.
+    ``region``, ``axis_weight``: see :func:`constraint_masks`, :func:`axis_weights`.
     Returns (offsets, mask of pixels changed from the intermediate tile, energy, accepted candidates)."""
     ex = np.asarray(example, np.float64)
     s = offsets.shape[0]
-    keep_a, pin_b = constraint_masks(s, margin, core)
+    keep_a, pin_b = constraint_masks(s, margin, core, region)
     none = np.zeros((s, s), bool)
-    jw = dict(junction_weight=junction_weight)
+    jw = dict(junction_weight=junction_weight, axis_weight=axis_weight)
     cur, _, energy = merge_offsets(ex, offsets, candidates[0], keep_a, pin_b, normalise,
                                    junction_pairs(offsets, offsets), **jw)
     accepted = [tuple(int(v) for v in candidates[0])]
