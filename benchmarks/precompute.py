@@ -51,6 +51,8 @@ def main():
     res = {"precompute_s": t_pre, "timings": tb.meta["timings"], "spp": spp,
            "volpath_one_param_set_s": t_ref, "ratio_precompute_vs_110_volpath": t_pre / (110 * t_ref),
            "relative_standard_error": tb.meta.get("relative_standard_error"),
+           "pixel_relative_standard_error": tb.meta.get("pixel_relative_standard_error"),
+           "traced_pixels": tb.meta.get("traced_pixels"), "footprint_pixels": tb.meta.get("footprint_pixels"),
            "tables_memory_MB": tb.nbytes() / 1e6, "tables_disk_MB": sum(meta["files_bytes"].values()) / 1e6,
            "render_640x480_s": t_render, "render_spp": 32, "targets": {"precompute_s": 300, "render_s": 10}}
     out = Path("results/benchmarks/precompute.json")

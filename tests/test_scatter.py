@@ -13,6 +13,7 @@ from natscene.io import InputError
 from natscene.scatter.compose import apply_atmosphere, compose, compose_cloud, lerp_weights
 from natscene.scatter.medium import make_medium
 from natscene.scatter.mitsuba_scene import render_reference, render_transmittance
+from natscene.scatter.multiple import trace_orders
 from natscene.scatter.phase import hg
 from natscene.scatter.render import render
 from natscene.scatter.single import march_view
@@ -127,6 +128,43 @@ def test_compose_matches_volpath_four_orders(tables, vol, sig, g, beta):
     # per pixel both sides carry Monte Carlo noise; with g = 0.8 next-event estimation through the peaked
     # HG lobe is heavy-tailed (measured 0.10 at 1k/2k spp, 0.057 at 4k/8k spp: noise, not bias)
     assert err < (0.08 if g >= 0.8 else 0.04)
+
+
+def test_g08_meets_three_percent_with_stronger_reference(vol):
+    """The issue's <= 3 % mean relative error for g = 0.8 (all g of the table from the same paths, mixture
+    proposal over [0, 0.4, 0.8]). Per-pixel noise is what limits it (measured at 4k spp, 16x12: ours 0.063,
+    volpath 0.035 relative L1 between two seeds / sqrt 2), so both sides get 32k spp at half the test
+    resolution (expected combined noise ~0.02). At 16x12 a pixel spans ~2 voxels of the blob: the
+    single-scattering march's 2x2 sub-rays (supersample=4) then leave a 2.6 % per-pixel box-filter error
+    against volpath's order 1 (measured; 1.1 % with 4x4), so this test marches 4x4 sub-rays per pixel."""
+    cam = Camera(CAM.position, CAM.look_at, fov=CAM.fov, width=16, height=12)
+    tb = precompute(vol, cam, SUN, sigmas=[0.0, 0.5], gs=[0.0, 0.4, 0.8], n_m=4, spp=32768, seed=2,
+                    supersample=16, with_error=False)
+    img = compose(tb, params(0.5, 0.8, 0.95), np.zeros((12, 16, 3), np.float32))[0, ..., 0]
+    ref = render_reference(vol, cam, SUN, 0.5, 0.8, 0.95, orders=4, spp=32768, seed=7)[..., 0]
+    cloud = (tb.footprint > 0) & (tb.transmittance[1] < 0.95)
+    assert cloud.sum() >= 25
+    err = rel_l1(img, ref, cloud)
+    bias = abs(img[cloud].sum() - ref[cloud].sum()) / ref[cloud].sum()
+    print(f"g=0.8 at 16x12, 32k/32k spp: relative L1 vs volpath {err:.4f}, bias of the sum {bias:.4f}")
+    assert err < 0.03 and bias < 0.02
+
+
+@pytest.mark.parametrize("opts", [dict(split=4), dict(guide=0.3, g_guide=0.8)])
+def test_sampling_options_are_unbiased(vol, opts):
+    """Splitting at the first vertex and sun-guided directions change only the variance: the image sums
+    of every order and g agree with plain sampling within 4 combined standard errors."""
+    med = make_medium(vol, SUN)
+    cam = Camera(CAM.position, CAM.look_at, fov=CAM.fov, width=16, height=12)
+    a, sa = trace_orders(med, cam, 0.5, [0.0, 0.8], n_max=3, spp=4096, seed=4, with_error=True)
+    b, sb = trace_orders(med, cam, 0.5, [0.0, 0.8], n_max=3, spp=4096 // opts.get("split", 1), seed=5,
+                         with_error=True, **opts)
+    for k in range(3):
+        for j in range(2):
+            d = abs(a[k, j].sum() - b[k, j].sum())
+            s = np.sqrt((sa[k, j] ** 2).sum() + (sb[k, j] ** 2).sum())
+            assert d < 4 * s + 1e-9, (k + 1, j, d, s)
+            assert s < 0.05 * a[k, j].sum()  # the check has power
 
 
 # ------------------------------------------------------------------------------ composition

@@ -14,13 +14,19 @@ import drjit as dr
 import mitsuba as mi
 
 
-def camera_rays(camera, spp: int, rng=None, stratified: bool = False):
-    """(origin Point3f, unit direction Vector3f, pixel index UInt32) for W*H*spp samples."""
+def camera_rays(camera, spp: int, rng=None, stratified: bool = False, pixels=None):
+    """(origin Point3f, unit direction Vector3f, pixel index UInt32) for W*H*spp samples.
+
+    ``pixels``: flat pixel indices (numpy) to trace instead of all W*H: sample s of the i-th listed pixel
+    lives at flat index i * spp + s; the returned pixel index is the image's.
+    """
     W, H = camera.width, camera.height
-    n = W * H * spp
+    npix = W * H if pixels is None else int(len(pixels))
+    n = npix * spp
     idx = dr.arange(mi.UInt32, n)
-    pix = idx // spp
-    s = idx - pix * spp
+    slot = idx // spp
+    s = idx - slot * spp
+    pix = slot if pixels is None else dr.gather(mi.UInt32, mi.UInt32(np.asarray(pixels, np.uint32)), slot)
     row = pix // W
     col = pix - row * W
     if stratified:

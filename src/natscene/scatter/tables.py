@@ -111,15 +111,22 @@ def precompute(volume, camera, sun_dir, sigmas=DEFAULT_SIGMAS, gs=DEFAULT_GS, n_
     orders = list(range(2, n_m + 1))
     H, W = camera.height, camera.width
     multiple = np.zeros((len(orders), len(gs), len(sigmas), H, W), np.float32)
+    single_cos = camera.ray_directions() @ (med.sun_dir / np.linalg.norm(med.sun_dir))
     rel_se = {k: [] for k in orders}
     foot = single["footprint"] > 0
+    # only pixels whose view rays meet any density can score (T < 1 at the largest sigma_t), dilated by
+    # one pixel for jittered rays at the silhouette; the others are exactly 0 and are not traced
+    from scipy.ndimage import binary_dilation
+    traced = np.flatnonzero(binary_dilation(single["T"][-1] < 1, iterations=1)) if sigmas[-1] > 0 else None
+    weighted = {k: [] for k in orders}
+    weighted_sum = []
     t2 = time.perf_counter()
     for i, s in enumerate(sigmas):
         if s <= 0 or not orders:
             continue
         ts = time.perf_counter()
         out = trace_orders(med, camera, float(s), gs, n_max=n_m, spp=spp, seed=seed * 1000 + i,
-                           batch_spp=batch_spp, with_error=with_error)
+                           batch_spp=batch_spp, with_error=with_error, pixels=traced)
         est, se = out if with_error else (out, None)
         multiple[:, :, i] = est[1:]
         if with_error:
@@ -127,6 +134,15 @@ def precompute(volume, camera, sun_dir, sigmas=DEFAULT_SIGMAS, gs=DEFAULT_GS, n_
                 e, u = est[k - 1][:, foot], se[k - 1][:, foot]
                 ok = e > 0
                 rel_se[k].append((u[ok] / e[ok]).astype(np.float32))
+            # the same noise relative to the pixel's composed cloud radiance at beta = 1, L_amb = 0:
+            # L = p(theta_q, g) S_sun + sum_k E^(k) (what the noise does to the image the GA sees)
+            from natscene.scatter.phase import hg
+            L = hg(single_cos[foot][None], gs[:, None]) * single["S_sun"][i][foot][None] + est[1:][:, :, foot].sum(0)
+            okL = L > 0
+            for ki, k in enumerate(orders):
+                weighted[k].append((se[k - 1][:, foot][okL] / L[okL]).astype(np.float32))
+            tot = np.sqrt((se[1:][:, :, foot] ** 2).sum(0))
+            weighted_sum.append((tot[okL] / L[okL]).astype(np.float32))
         log(f"multiple scattering sigma_t={s:g}: orders {orders[0]}..{n_m}, {len(gs)} g, {spp} spp "
             f"in {time.perf_counter() - ts:.1f} s")
     timings["multiple_s"] = time.perf_counter() - t2
@@ -144,6 +160,15 @@ def precompute(volume, camera, sun_dir, sigmas=DEFAULT_SIGMAS, gs=DEFAULT_GS, n_
         meta["relative_standard_error"] = {
             f"k{k}": ({"median": float(np.median(np.concatenate(v))), "p95": float(np.percentile(np.concatenate(v), 95))}
                       if v and np.concatenate(v).size else None) for k, v in rel_se.items()}
+
+        def stats(v):
+            v = np.concatenate(v) if v else np.zeros(0)
+            return {"median": float(np.median(v)), "p95": float(np.percentile(v, 95))} if v.size else None
+        # standard error of E^(k) divided by the pixel's composed radiance (beta = 1, no ambient), and of
+        # sum_k E^(k) (orders' errors combined in quadrature), over cloud pixels, all sigma_t > 0 and g
+        meta["pixel_relative_standard_error"] = {**{f"k{k}": stats(v) for k, v in weighted.items()},
+                                                 "sum": stats(weighted_sum)}
+        meta["traced_pixels"] = int(H * W if traced is None else traced.size)
     return Tables(sigmas, gs, orders, single["S_sun"], single["S_amb"], single["T"], multiple, t_c, cos_t,
                   footprint, meta)
 
