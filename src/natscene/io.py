@@ -181,37 +181,42 @@ def _attr_value(v):
     return v
 
 
+def _read_pixels(path: Path, what: str, fmt=oiio.FLOAT):
+    """Open any OIIO-readable image; return (pixels (H, W, C) in ``fmt``, spec), or raise InputError."""
+    if not path.is_file():
+        raise InputError(f"{path}: {what} not found")
+    inp = oiio.ImageInput.open(str(path))
+    if inp is None:
+        raise InputError(f"{path}: not a readable image ({oiio.geterror().strip() or 'unknown format'})")
+    try:
+        spec = inp.spec()
+        pixels = inp.read_image(0, 0, 0, spec.nchannels, fmt)
+        if pixels is None:
+            raise InputError(f"{path}: cannot decode pixels ({inp.geterror()})")
+    finally:
+        inp.close()
+    dtype = np.uint8 if fmt == oiio.UINT8 else np.float32
+    return np.asarray(pixels, dtype).reshape(spec.height, spec.width, spec.nchannels), spec
+
+
 def read_exr(path: str | os.PathLike) -> Image:
     """Read an OpenEXR (or any OIIO-readable) image as float32 (H, W, C) with names and attributes.
 
     Attributes written by :func:`write_exr` come back without their ``natscene:`` prefix.
     """
-    path = Path(path)
-    if not path.is_file():
-        raise InputError(f"{path}: file not found")
-    inp = oiio.ImageInput.open(str(path))
-    if inp is None:
-        raise InputError(f"{path}: cannot read image ({oiio.geterror()})")
-    try:
-        spec = inp.spec()
-        pixels = inp.read_image(0, 0, 0, spec.nchannels, oiio.FLOAT)
-        if pixels is None:
-            raise InputError(f"{path}: cannot decode pixels ({inp.geterror()})")
-        attrs = {}
-        for p in spec.extra_attribs:
-            name = p.name[len(ATTR_PREFIX):] if p.name.startswith(ATTR_PREFIX) else p.name
-            attrs[name] = _attr_value(p.value)
-        pixels = np.asarray(pixels, np.float32).reshape(spec.height, spec.width, spec.nchannels)
-        names = list(spec.channelnames)
-        order = attrs.pop("channel_order", None)
-        if order:
-            wanted = order.split(",")
-            if sorted(wanted) == sorted(names):
-                pixels = pixels[..., [names.index(n) for n in wanted]]
-                names = wanted
-        return Image(np.ascontiguousarray(pixels), names, attrs)
-    finally:
-        inp.close()
+    pixels, spec = _read_pixels(Path(path), "image")
+    attrs = {}
+    for p in spec.extra_attribs:
+        name = p.name[len(ATTR_PREFIX):] if p.name.startswith(ATTR_PREFIX) else p.name
+        attrs[name] = _attr_value(p.value)
+    names = list(spec.channelnames)
+    order = attrs.pop("channel_order", None)
+    if order:
+        wanted = order.split(",")
+        if sorted(wanted) == sorted(names):
+            pixels = pixels[..., [names.index(n) for n in wanted]]
+            names = wanted
+    return Image(np.ascontiguousarray(pixels), names, attrs)
 
 
 # ----------------------------------------------------------------------------------------- photos
@@ -222,21 +227,9 @@ def read_photo(path: str | os.PathLike, keep_alpha: bool = False) -> np.ndarray:
     linear. Alpha is dropped unless ``keep_alpha``. Greyscale images come back with C = 1.
     """
     path = Path(path)
-    if not path.is_file():
-        raise InputError(f"{path}: photo not found")
-    inp = oiio.ImageInput.open(str(path))
-    if inp is None:
-        raise InputError(f"{path}: not a readable image ({oiio.geterror().strip() or 'unknown format'})")
-    try:
-        spec = inp.spec()
-        is_float = spec.format.basetype in (oiio.FLOAT, oiio.HALF, oiio.DOUBLE)
-        pixels = inp.read_image(0, 0, 0, spec.nchannels, oiio.FLOAT)
-        if pixels is None:
-            raise InputError(f"{path}: cannot decode image ({inp.geterror()})")
-        a = np.asarray(pixels, np.float32).reshape(spec.height, spec.width, spec.nchannels)
-        alpha_idx = spec.alpha_channel
-    finally:
-        inp.close()
+    a, spec = _read_pixels(path, "photo")
+    is_float = spec.format.basetype in (oiio.FLOAT, oiio.HALF, oiio.DOUBLE)
+    alpha_idx = spec.alpha_channel
     alpha = None
     if alpha_idx >= 0:
         alpha = a[..., alpha_idx:alpha_idx + 1]
@@ -253,18 +246,8 @@ def read_photo(path: str | os.PathLike, keep_alpha: bool = False) -> np.ndarray:
 
 def read_mask(path: str | os.PathLike) -> np.ndarray:
     """Read a mask image as float32 (H, W) in [0, 1] without any colour decoding (first channel)."""
-    path = Path(path)
-    if not path.is_file():
-        raise InputError(f"{path}: mask not found")
-    inp = oiio.ImageInput.open(str(path))
-    if inp is None:
-        raise InputError(f"{path}: not a readable image ({oiio.geterror()})")
-    try:
-        spec = inp.spec()
-        a = np.asarray(inp.read_image(0, 0, 0, spec.nchannels, oiio.FLOAT), np.float32)
-    finally:
-        inp.close()
-    return a.reshape(spec.height, spec.width, spec.nchannels)[..., 0].copy()
+    a, _ = _read_pixels(Path(path), "mask")
+    return a[..., 0].copy()
 
 
 # ------------------------------------------------------------------------------------------- PNG
@@ -322,13 +305,4 @@ def write_png(path: str | os.PathLike, image: np.ndarray, exposure: float | str 
 
 def read_image_u8(path: str | os.PathLike) -> np.ndarray:
     """Read an 8-bit image (PNG/JPEG) as stored, uint8 (H, W, C), no colour decoding."""
-    path = Path(path)
-    inp = oiio.ImageInput.open(str(path))
-    if inp is None:
-        raise InputError(f"{path}: not a readable image ({oiio.geterror()})")
-    try:
-        spec = inp.spec()
-        a = np.asarray(inp.read_image(0, 0, 0, spec.nchannels, oiio.UINT8), np.uint8)
-    finally:
-        inp.close()
-    return a.reshape(spec.height, spec.width, spec.nchannels)
+    return _read_pixels(Path(path), "image", oiio.UINT8)[0]
