@@ -124,7 +124,9 @@ def test_compose_matches_volpath_four_orders(tables, vol, sig, g, beta):
     err = rel_l1(img, ref, cloud)
     bias = abs(img[cloud].sum() - ref[cloud].sum()) / ref[cloud].sum()
     print(f"sigma_t={sig} g={g} beta={beta}: relative L1 vs volpath {err:.4f}, bias of the sum {bias:.4f}")
-    assert bias < 0.03
+    # sum bias measured 0.2 / 0.9 / 0.4 % (it was 2.2 % at sigma_t = 1 before the sun optical depth got its
+    # exact near field, see Medium.sun_depth); the issue allows 3 %
+    assert bias < 0.015
     # per pixel both sides carry Monte Carlo noise; with g = 0.8 next-event estimation through the peaked
     # HG lobe is heavy-tailed (measured 0.10 at 1k/2k spp, 0.057 at 4k/8k spp: noise, not bias)
     assert err < (0.08 if g >= 0.8 else 0.04)
@@ -147,7 +149,7 @@ def test_g08_meets_three_percent_with_stronger_reference(vol):
     err = rel_l1(img, ref, cloud)
     bias = abs(img[cloud].sum() - ref[cloud].sum()) / ref[cloud].sum()
     print(f"g=0.8 at 16x12, 32k/32k spp: relative L1 vs volpath {err:.4f}, bias of the sum {bias:.4f}")
-    assert err < 0.03 and bias < 0.02
+    assert err < 0.03 and bias < 0.015
 
 
 @pytest.mark.parametrize("opts", [dict(split=4), dict(guide=0.3, g_guide=0.8)])

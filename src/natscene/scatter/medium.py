@@ -55,10 +55,28 @@ class Medium:
         v = self.density_tex.eval(uvw)[0]
         return dr.select(inside, dr.maximum(v, 0.0), 0.0)
 
+    near_voxels: float = 4.0    # near field of D marched exactly (voxels), see sun_depth
+    near_steps: int = 4
+
     def sun_depth(self, p):
-        """D(x) (integral of rho toward the sun, world units) at world points."""
-        uvw = self.to_uvw(p)
-        return self.sun_depth_tex.eval(uvw)[0]
+        """D(x) (integral of rho toward the sun, world units) at world points.
+
+        The first ``near_voxels`` toward the sun are integrated from the trilinear density (midpoint rule,
+        ``near_steps`` steps), the rest is the voxel-centred volume looked up at the end of that stretch.
+        Interpolating D itself overestimates it in the lit skin, where rho rises inward (D convex): that
+        made tau_sun, hence order 1 and 2, 3 % low against volpath at sigma_t = 1 on a 24^3 blob (1 % at
+        0.5); with the 4-voxel near field, 0.1 % (tests: the volpath comparisons).
+        """
+        if self.near_steps <= 0 or self.near_voxels <= 0:
+            return self.sun_depth_tex.eval(self.to_uvw(p))[0]
+        s = mi.Vector3f(*[float(c) for c in self.sun_dir])
+        _, t_far = ray_box_dr(p, s, self.bbox_min, self.bbox_max)
+        length = dr.minimum(self.near_voxels * self.voxel, dr.maximum(t_far, 0.0))
+        h = length / self.near_steps
+        acc = mi.Float(0.0)
+        for i in range(self.near_steps):
+            acc += self.rho(p + s * ((i + 0.5) * h)) * h
+        return acc + self.sun_depth_tex.eval(self.to_uvw(p + s * length))[0]
 
 
 def _check_volume(volume) -> np.ndarray:

@@ -14,6 +14,19 @@ from the mixture q = (1/N_g) Σ_j p(·, g_j) of the grid's HG lobes (one-sample 
 weight blows up) and each g keeps its own running product W_g. With a single g the proposal is HG(g) and
 W_g = 1 (the forward renderer). Orders 1..n_max are tallied; the tables keep k >= 2 (order 1 is Eq. 5's
 ray-marched S_sun, the MC order 1 serves as a cross-check). Sum of squares per pixel gives standard errors.
+
+Options, all unbiased (tests compare them with plain sampling): ``pixels`` traces only the listed pixels
+(the precompute passes those whose view rays meet density: the others are exactly 0); ``split`` continues
+every camera path from its first vertex as ``split`` secondary paths of weight 1/split (the standard error
+is then taken over camera paths); ``guide`` draws that fraction of the directions from an HG(``g_guide``)
+lobe around the direction toward the sun, weights with the whole mixture pdf. Where the variance is
+(measured on the 194x122x194 cumulus, kite view, 320x240, 16 spp): per-sample coefficient of variation
+≈ 1.6 / 2.1 / 2.4 for orders 2 / 3 / 4 at every sigma_t in 0.1..1 (this cloud is optically thick even at
+0.1); split 4 at 4 camera paths gives the same error as 16 camera paths (the first vertex's position
+carries almost none of it, the first flight ≈ 15 % of the cost), guide 0.3 / g 0.8 lowers it by ≈ 8 % at
+≈ 1.3x the cost: both off by default. What remains is the escape-or-collide outcome of each later segment
+and where the next vertex lands relative to the lit surface; a per-pixel relative error of 5 % for
+order 4 needs ≈ 2,300 camera paths per pixel (~9x the default 256).
 """
 from __future__ import annotations
 
