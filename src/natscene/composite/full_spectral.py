@@ -105,18 +105,7 @@ def render_full_spectral(renderer: SetRenderer) -> tuple[np.ndarray, np.ndarray]
             if surf.any():
                 rho2 = r.albedo(mh.kind[surf], mh.index[surf], mh.uv[surf], inp.ground, inp.leaves)
                 L_env[surf] = _radiance(rho2, sun_S, inp.ambient, mh.sun_cos[surf], mh.ambient[surf])
-            s = np.zeros((mh.cos_v.size, N), np.float32)
-            idx = h.index[fm]
-            sun_cos = h.sun_cos[fm]
-            for i, ob in enumerate(spec.objects):
-                k = idx == i
-                if not k.any():
-                    continue
-                tab = r.tables[i]
-                lobe = r.lobe(ob, mh.nh[k], sun_cos[k])[:, None]
-                s[k] = (tab.reflectance(mh.cos_v[k]) * L_env[k] +
-                        (tab.reflectance(mh.cos_d[k]) + inp.highlight[i][None]) * (sun_S[None] * lobe))
-            out[fm] = s
+            out[fm] = r.film_spectra(h, fm, mh, L_env, highlight_spectra=inp.highlight)[0]
         S[sl] = out.reshape(spp, n, N).sum(0)
     S *= np.float32(1.0 / spp)
     rgb = (S @ spectrum_to_rgb_matrix(spec.grid).astype(np.float32)).reshape(H, W, 3)

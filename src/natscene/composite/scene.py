@@ -415,19 +415,34 @@ class SetRenderer:
         radiance the mirror ray gathers is upsampled to a spectrum, the sun's SPD is used as is."""
         spec = self.spec
         L_env = rgb_to_radiance(self.gather_mirror_rgb(mh), spec.grid, spec.upsampling).astype(np.float32)
-        S = np.zeros((mh.cos_v.size, spec.grid.size), np.float32)
-        rgb = np.zeros((mh.cos_v.size, 3), np.float32)
+        S, lobe = self.film_spectra(h, fm, mh, L_env)
+        highlight = np.zeros((mh.cos_v.size, 3), np.float32)
+        idx = h.index[fm]
+        for i, ob in enumerate(spec.objects):
+            highlight[idx == i] = np.asarray(ob.highlight_rgb, np.float32)
+        return S, highlight * self.sun_rgb[None] * lobe[:, None]
+
+    def film_spectra(self, h: Hits, fm: np.ndarray, mh: MirrorHits, L_env: np.ndarray,
+                     highlight_spectra=None) -> tuple[np.ndarray, np.ndarray]:
+        """Spectral radiance (F, N) of film samples: the tabulated film reflectance times the environment
+        spectrum ``L_env`` the mirror ray brings, plus the sun's SPD through the glossy lobe (Eqs. 1.14-1.25
+        tables, §2.2). ``highlight_spectra[i]`` (N,) is added to object i's sun reflectance (the full-spectral
+        mode's upsampled highlight; the hybrid mode keeps the highlight in RGB). Also returns the lobe (F,)."""
+        S = np.zeros((mh.cos_v.size, self.spec.grid.size), np.float32)
+        lobe = np.zeros(mh.cos_v.size, np.float32)
         idx = h.index[fm]
         sun_cos = h.sun_cos[fm]
-        for i, ob in enumerate(spec.objects):
+        for i, ob in enumerate(self.spec.objects):
             k = idx == i
             if not k.any():
                 continue
             tab = self.tables[i]
-            lobe = self.lobe(ob, mh.nh[k], sun_cos[k])
-            S[k] = tab.reflectance(mh.cos_v[k]) * L_env[k] + tab.reflectance(mh.cos_d[k]) * (self.sun_S[None] * lobe[:, None])
-            rgb[k] = np.asarray(ob.highlight_rgb, np.float32)[None] * self.sun_rgb[None] * lobe[:, None]
-        return S, rgb
+            lobe[k] = self.lobe(ob, mh.nh[k], sun_cos[k])
+            sun_refl = tab.reflectance(mh.cos_d[k])
+            if highlight_spectra is not None:
+                sun_refl = sun_refl + highlight_spectra[i][None]
+            S[k] = tab.reflectance(mh.cos_v[k]) * L_env[k] + sun_refl * (self.sun_S[None] * lobe[k][:, None])
+        return S, lobe
 
     # -- the hybrid render
     def render_hybrid(self) -> HybridImage:
