@@ -11,18 +11,12 @@ from natscene.mie.phase import (compute_mie_table, fogbow_peak_deg, glory_ring_d
 from natscene.mie.points import generate_points
 from natscene.mie.solver import load_solution, save_solution, solve
 from natscene.volume.grid import Volume
+from helpers import sphere_volume
 
 
 @pytest.fixture(scope="module")
 def table():
     return compute_mie_table(r_eff_um=10.0, v_eff=0.1, n_radii=80, spectral_nm=(450, 650))
-
-
-def sphere_volume(n=40, radius=0.4, ext=40.0):
-    x = (np.arange(n) + 0.5) / n - 0.5
-    zz, yy, xx = np.meshgrid(x, x, x, indexing="ij")
-    d = (np.sqrt(xx**2 + yy**2 + zz**2) < radius).astype(np.float32)
-    return Volume(d, np.array([-0.5, 0.0, -0.5]), np.array([0.5, 1.0, 0.5]), ext)
 
 
 @pytest.fixture(scope="module")

@@ -23,23 +23,16 @@ from natscene.mie.phase import compute_mie_table
 from natscene.mie.points import generate_points
 from natscene.mie.reference import ratio_grid, render_reference_mie, tabphase_values
 from natscene.mie.solver import solve
-from natscene.volume.grid import Volume
+from helpers import sphere_volume
 
 SUN = np.array([1.0, 0.0, 0.0])
 CENTRE = np.array([0.0, 0.5, 0.0])
 
 
-def sphere_volume(n=32, radius=0.4, ext=40.0):
-    x = (np.arange(n) + 0.5) / n - 0.5
-    zz, yy, xx = np.meshgrid(x, x, x, indexing="ij")
-    d = (np.sqrt(xx**2 + yy**2 + zz**2) < radius).astype(np.float32)
-    return Volume(d, np.array([-0.5, 0.0, -0.5]), np.array([0.5, 1.0, 0.5]), ext)
-
-
 @pytest.fixture(scope="module")
 def setup():
     table = compute_mie_table(r_eff_um=10.0, v_eff=0.1, n_radii=48, spectral_nm=())
-    vol = sphere_volume()
+    vol = sphere_volume(n=32)
     pts = generate_points(vol, SUN, sigma_t=0.3, spacing_voxels=1.5)
     return vol, table, solve(pts, table, passes=0), solve(pts, table, passes=4)
 
