@@ -4,11 +4,11 @@ footprint, 28 % of the frame like the main job's kite view), the full image, aga
 same run: the former dense (P x K·Ng·Ns) @ (K·Ng·Ns x H·W) product and a naive per-individual numpy loop.
 Writes results/benchmarks/compose.json. Uses synthetic tables of the real shape (K=3, Ng=10, Ns=11) so it
 needs no precompute run."""
-import json
 import time
-from pathlib import Path
 
 import numpy as np
+
+from _common import write_result
 
 import natscene  # noqa: F401
 from natscene.scatter.compose import apply_atmosphere, compose_cloud
@@ -119,10 +119,7 @@ def main():
                speedup_pixels_vs_dense_product=res["baseline_dense_product_s"] / res["compose_pixels_s"],
                speedup_full_vs_dense_product=res["baseline_dense_product_s"] / res["compose_s"], target_s=0.030,
                tables_memory_MB=sum(a.nbytes for a in (tb.s_sun, tb.s_amb, tb.transmittance, tb.multiple)) / 1e6)
-    out = Path("results/benchmarks/compose.json")
-    out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(json.dumps(res, indent=2))
-    print(json.dumps(res, indent=2))
+    write_result("compose", res)
 
 
 if __name__ == "__main__":

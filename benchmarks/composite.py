@@ -16,14 +16,14 @@ coloured light.
 
 Writes results/benchmarks/composite.json. Usage: python benchmarks/composite.py [W H spp repeats]
 """
-import json
 import os
 import sys
 import time
-from pathlib import Path
 
 import colour
 import numpy as np
+
+from _common import write_result
 
 from natscene.color import linear_srgb_to_lab
 from natscene.composite.full_spectral import render_full_spectral
@@ -54,7 +54,7 @@ def quality(hy_final, full):
             "dE2000_p99": float(np.percentile(de, 99)), "dE2000_max": float(de.max())}
 
 
-def main(W=320, H=240, spp=4, repeats=5, out="results/benchmarks/composite.json"):
+def main(W=320, H=240, spp=4, repeats=5):
     spec = make_set(W, H, spp, ([0.5, 0.5, 0.5], [0.6, 0.6, 0.6]))
     r = SetRenderer(spec)
     r.render_hybrid().final()  # warm-up: kernel compilation (cached on disk afterwards)
@@ -96,9 +96,7 @@ def main(W=320, H=240, spp=4, repeats=5, out="results/benchmarks/composite.json"
     hb = rb.render_hybrid()
     _, fb = render_full_spectral(rb)
     res["scene_B_blue_sky"] = quality(hb.final(), fb)
-    Path(out).parent.mkdir(parents=True, exist_ok=True)
-    Path(out).write_text(json.dumps(res, indent=2))
-    print(json.dumps(res, indent=2))
+    write_result("composite", res)
 
 
 if __name__ == "__main__":

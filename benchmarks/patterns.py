@@ -3,11 +3,12 @@ target <= 10 s on 2 cores). Measured: the explicit split scheme of ``simulate`` 
 vascular sub-steps) run until the max relative change per unit time < tol. Baseline in the same run: the
 previous semi-implicit scheme (sparse LU of I - dt D L, one solve per species per step), timed per step
 over a few steps and extrapolated to the same simulated time. Writes results/benchmarks/patterns.json."""
-import json
 import time
 from pathlib import Path
 
 import numpy as np
+
+from _common import write_result
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
@@ -46,6 +47,4 @@ out.update({"cells": int(cells.size), "baseline_lu_factorise_s": t_fact, "baseli
             "baseline_lu_extrapolated_s": t_fact + per_step * ref["steps"],
             "speedup_vs_lu": (t_fact + per_step * ref["steps"]) / ref["seconds"],
             "paper_seconds_2007": 466.0, "target_seconds": 10.0})
-Path("results/benchmarks").mkdir(parents=True, exist_ok=True)
-Path("results/benchmarks/patterns.json").write_text(json.dumps(out, indent=2))
-print(json.dumps(out, indent=2))
+write_result("patterns", out)

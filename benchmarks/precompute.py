@@ -4,12 +4,12 @@ pixel, table sizes, and render at 640x480 (orders <= 4; Dobashi ~30 s; target <=
 same run: Mitsuba volpath at the same resolution / orders / spp for ONE (sigma_t, g) (what a per-g,
 per-sigma_t approach would pay 110 times). Writes results/benchmarks/precompute.json.
 Usage: python benchmarks/precompute.py [volume_dir] [spp]   (default: a synthetic 194x122x194 cloud)."""
-import json
 import sys
 import time
-from pathlib import Path
 
 import numpy as np
+
+from _common import write_result
 
 import natscene  # noqa: F401
 from natscene.geometry import Camera, sun_direction
@@ -55,10 +55,7 @@ def main():
            "traced_pixels": tb.meta.get("traced_pixels"), "footprint_pixels": tb.meta.get("footprint_pixels"),
            "tables_memory_MB": tb.nbytes() / 1e6, "tables_disk_MB": sum(meta["files_bytes"].values()) / 1e6,
            "render_640x480_s": t_render, "render_spp": 32, "targets": {"precompute_s": 300, "render_s": 10}}
-    out = Path("results/benchmarks/precompute.json")
-    out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(json.dumps(res, indent=2))
-    print(json.dumps(res, indent=2))
+    write_result("precompute", res)
 
 
 if __name__ == "__main__":

@@ -5,12 +5,13 @@ throughput of tiling a 4096x4096 texture (target >= 50 Mpixel/s) against a per-t
 and the junction removal of the 36 tiles (graph-cut merges, §5.2) with the default refinement against the
 single best-matching-patch merge of Dong's construction (candidates=1, passes=1), with the seam energies.
 Writes results/benchmarks/tiles.json."""
-import json
 import sys
 import time
 from pathlib import Path
 
 import numpy as np
+
+from _common import write_result
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "src"))
@@ -88,10 +89,7 @@ def main():
                         "baseline_tile_loop_seconds": loop_s, "speedup": loop_s / tile_s,
                         "target_mpixel_per_s": 50.0},
     }
-    p = ROOT / "results/benchmarks/tiles.json"
-    p.parent.mkdir(parents=True, exist_ok=True)
-    p.write_text(json.dumps(res, indent=2))
-    print(json.dumps(res, indent=2))
+    write_result("tiles", res)
 
 
 if __name__ == "__main__":
