@@ -14,8 +14,11 @@ rule leaf_season:
         code=fingerprint("leaves", "patterns", "io", "color"),
     log:
         f"{RESULTS}/logs/leaf_season/{{climate}}.log",
+    threads: 1
+    resources:
+        mem_mb=1500,
     script:
-        str(ROOT / "scripts" / "leaf_season.py")
+        script_path("leaf_season.py")
 
 
 ALL_TARGETS.extend(expand(f"{RESULTS}/leaves/{config['leaves']['name']}/{{climate}}/strip.png",

@@ -15,7 +15,7 @@ rule pigment_maps:
     resources:
         mem_mb=3000,
     script:
-        str(ROOT / "scripts" / "pigment_maps.py")
+        script_path("pigment_maps.py")
 
 
 rule pattern_color:
@@ -29,8 +29,11 @@ rule pattern_color:
         code=fingerprint("patterns", "io", "color"),
     log:
         f"{RESULTS}/logs/pattern_color/{{pattern}}.log",
+    threads: 1
+    resources:
+        mem_mb=1500,
     script:
-        str(ROOT / "scripts" / "pattern_color.py")
+        script_path("pattern_color.py")
 
 
 rule recolour:
@@ -46,8 +49,10 @@ rule recolour:
     log:
         f"{RESULTS}/logs/recolour/{{photo}}.log",
     threads: 2
+    resources:
+        mem_mb=2000,
     script:
-        str(ROOT / "scripts" / "recolour.py")
+        script_path("recolour.py")
 
 
 ALL_TARGETS.extend(expand(f"{RESULTS}/patterns/{{pattern}}/preview.png", pattern=config["patterns"]))

@@ -25,7 +25,7 @@ rule precompute:
         mem_mb=6000,
     cache: "omit-software"
     script:
-        str(ROOT / "scripts" / "precompute.py")
+        script_path("precompute.py")
 
 
 ALL_TARGETS.extend(

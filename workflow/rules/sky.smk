@@ -57,6 +57,8 @@ rule sky_resample:
     log:
         f"{RESULTS}/logs/sky/{{photo}}_{{W}}x{{H}}.log",
     threads: 1
+    resources:
+        mem_mb=1000,
     script:
         script_path("sky_resample.py")
 
