@@ -18,7 +18,7 @@ def main(snakemake, log):
     phase = snakemake.wildcards.phase
     vol = load_volume(snakemake.input.meta.rsplit("/", 1)[0])
     table = read_table(snakemake.input.table)
-    if phase == "hg":
+    if phase.startswith("hg"):
         table = hg_table(float(table.g[1]))
     sd = sun_direction(sun["azimuth"], sun["elevation"])
     t = time.perf_counter()

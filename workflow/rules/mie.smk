@@ -4,7 +4,8 @@
 
 wildcard_constraints:
     sun="az-?[0-9.]+_el-?[0-9.]+",
-    phase="mie|hg",
+    phase="(mie|hg)(-[A-Za-z0-9_]+)?",
+    droplets="[A-Za-z0-9_]+",
     shot="glory|fogbow|silver_lining",
 
 
@@ -37,15 +38,65 @@ rule mie_table:
         script_path("mie_table.py")
 
 
+def _mie_table_path(droplets):
+    """The Mie table of a droplet population: the default (section `table`) or a named one (`droplets`)."""
+    return f"{RESULTS}/mie/table.exr" if not droplets else f"{RESULTS}/mie/tables/{droplets}/table.exr"
+
+
+def _mie_volume_dir(volume):
+    """`mie_deck`: the thin stratocumulus deck of rule mie_deck; else a volume of the volume stage."""
+    return f"{RESULTS}/mie/deck" if volume == "mie_deck" else f"{RESULTS}/volumes/{volume}"
+
+
+def _mie_phase_droplets(phase):
+    return phase.split("-", 1)[1] if "-" in phase else None
+
+
+rule mie_table_droplets:
+    output:
+        table=f"{RESULTS}/mie/tables/{{droplets}}/table.exr",
+        summary=f"{RESULTS}/mie/tables/{{droplets}}/table.yaml",
+        cartesian=f"{RESULTS}/mie/tables/{{droplets}}/table_cartesian.png",
+        polar=f"{RESULTS}/mie/tables/{{droplets}}/table_polar.png",
+    params:
+        # RGB only (the renderer's channels): the population's r_eff, v_eff over the default settings
+        settings=lambda wc: {**config["mie"]["table"], **config["mie"]["droplets"][wc.droplets], "spectral_nm": []},
+        code=fingerprint("mie", "io"),
+    log:
+        f"{RESULTS}/logs/mie/table_{{droplets}}.log",
+    threads: 1
+    resources:
+        mem_mb=1000,
+    script:
+        script_path("mie_table.py")
+
+
+rule mie_deck:
+    output:
+        density=f"{RESULTS}/mie/deck/density.vol",
+        meta=f"{RESULTS}/mie/deck/meta.yaml",
+    params:
+        deck=lambda wc: config["mie"]["deck"],
+        sigma_t=lambda wc: config["mie"]["solver"]["sigma_t"],
+        code=fingerprint("mie", "io", "volume"),
+    log:
+        f"{RESULTS}/logs/mie/deck.log",
+    threads: 1
+    resources:
+        mem_mb=1000,
+    script:
+        script_path("mie_deck.py")
+
+
 rule point_scatter:
     output:
         solution=f"{RESULTS}/mie/pointcloud/{{volume}}/{{sun}}/{{phase}}/solution.npz",
         ratio=f"{RESULTS}/mie/pointcloud/{{volume}}/{{sun}}/{{phase}}/ratio.png",
         summary=f"{RESULTS}/mie/pointcloud/{{volume}}/{{sun}}/{{phase}}/summary.yaml",
     input:
-        density=f"{RESULTS}/volumes/{{volume}}/density.vol",
-        meta=f"{RESULTS}/volumes/{{volume}}/meta.yaml",
-        table=f"{RESULTS}/mie/table.exr",
+        density=lambda wc: f"{_mie_volume_dir(wc.volume)}/density.vol",
+        meta=lambda wc: f"{_mie_volume_dir(wc.volume)}/meta.yaml",
+        table=lambda wc: _mie_table_path(_mie_phase_droplets(wc.phase)),
     params:
         settings=lambda wc: config["mie"]["solver"],
         sun=_mie_sun,
@@ -59,16 +110,25 @@ rule point_scatter:
         script_path("point_scatter.py")
 
 
+def _mie_shot_inputs(wc):
+    demo = config["mie"]["demo"]
+    shot = demo[wc.shot]
+    vol = "mie_deck" if shot["cloud"] == "deck" else wc.volume
+    sun = mie_sun_key(demo["sun"])
+    sfx = f"-{shot['droplets']}" if shot["droplets"] else ""
+    return {"density": f"{_mie_volume_dir(vol)}/density.vol", "meta": f"{_mie_volume_dir(vol)}/meta.yaml",
+            "table": _mie_table_path(shot["droplets"]),
+            "mie": f"{RESULTS}/mie/pointcloud/{vol}/{sun}/mie{sfx}/solution.npz",
+            "hg": f"{RESULTS}/mie/pointcloud/{vol}/{sun}/hg{sfx}/solution.npz"}
+
+
 rule mie_render:
     output:
         exr=f"{RESULTS}/mie/demo/{{volume}}/{{shot}}.exr",
         png=f"{RESULTS}/mie/demo/{{volume}}/{{shot}}.png",
+        summary=f"{RESULTS}/mie/demo/{{volume}}/{{shot}}.yaml",
     input:
-        density=f"{RESULTS}/volumes/{{volume}}/density.vol",
-        meta=f"{RESULTS}/volumes/{{volume}}/meta.yaml",
-        table=f"{RESULTS}/mie/table.exr",
-        mie=lambda wc: f"{RESULTS}/mie/pointcloud/{wc.volume}/{mie_sun_key(config['mie']['demo']['sun'])}/mie/solution.npz",
-        hg=lambda wc: f"{RESULTS}/mie/pointcloud/{wc.volume}/{mie_sun_key(config['mie']['demo']['sun'])}/hg/solution.npz",
+        unpack(_mie_shot_inputs),
     params:
         demo=lambda wc: config["mie"]["demo"],
         render=lambda wc: config["mie"]["render"],
