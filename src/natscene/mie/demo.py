@@ -59,7 +59,7 @@ def demo_camera(shot: str, volume, sun_dir, distance: float = 2.2, fov: float = 
 
 
 def stratocumulus_deck(size: float = 2.0, resolution: int = 160, thickness: float = 0.06,
-                       relief: float = 0.3, relief_scale: float = 0.1, optical_depth: float = 4.0,
+                       relief: float = 0.15, relief_scale: float = 0.15, optical_depth: float = 3.0,
                        sigma_t: float = 0.3, seed: int = 0):
     """A thin stratocumulus / fog deck: a horizontal slab ``size`` × ``size`` (world units, centred on
     x = z = 0) of cubic voxels (``resolution`` across), ``thickness`` thick above a base one voxel over
