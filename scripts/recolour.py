@@ -25,7 +25,7 @@ def main(snakemake, log):
     ven = venation_from_photo(luminance(small), msmall, tuple(spec["root"]))
     log.info(f"photo {w}x{h}: flower {mask.mean():.0%} of pixels; simulation {sw}x{sh}, "
              f"{int(ven.vascular.sum())} vein pixels extracted")
-    p = rd_params(spec["rd"], snakemake.params.seed)
+    p = rd_params(spec["rd"], snakemake.params.seed, sh)
     r = simulate(msmall, ven, p, logger=log)
     maps = [normalise(r.a, msmall), normalise(r.b, msmall)]
     conc = np.stack([resize(c, (h, w), order=1) for c in maps], -1) * float(spec.get("concentration", 1.0))
