@@ -264,7 +264,7 @@ def _react_implicit(a, b, dt, sa, sb, ka, kb, beta, iters=4):
     return a, b
 
 
-def _simulate_implicit(mask, venation, p, cells, L, a, b, root, ra, rb, logger, progress_every):
+def _simulate_implicit(p, cells, L, a, b, root, ra, rb, logger, progress_every):
     """Strang splitting of Eq. 3.5: half a step of diffusion (I - dt/2 D L) u' = u (sparse LU, factorised once
     per species), a full step of the local kinetics by implicit Euler, the other half step of diffusion. Both
     parts are unconditionally stable, so dt can be a sizeable fraction of 1 / (S K_A) and a slow-kinetics
@@ -301,6 +301,29 @@ def _simulate_implicit(mask, venation, p, cells, L, a, b, root, ra, rb, logger, 
     return a, b, steps, converged, res, history
 
 
+def _initial_state(mask, venation, p, cells, init, dtype):
+    """Initial (a, b) on the petal cells (steady state x (1 + noise), or ``init`` maps), the root cell's index
+    (None when the vein root is off the petal) and the root supply (ra, rb), already applied at the root."""
+    a0, b0 = p.steady_state()
+    n = cells.size
+    if init is None:
+        rng = np.random.default_rng(p.seed)
+        a = (a0 * (1.0 + p.noise * rng.standard_normal(n))).astype(dtype)
+        b = (b0 * (1.0 + p.noise * rng.standard_normal(n))).astype(dtype)
+    else:
+        a = np.asarray(init[0], dtype).ravel()[cells].copy()
+        b = np.asarray(init[1], dtype).ravel()[cells].copy()
+    h, w = mask.shape
+    r0, c0 = venation.root if venation is not None else (-1, -1)
+    root = None
+    if 0 <= r0 < h and 0 <= c0 < w and mask[r0, c0] > 0.5:
+        root = int(np.searchsorted(cells, r0 * w + c0))
+    ra, rb = dtype(a0 * p.root_supply[0]), dtype(b0 * p.root_supply[1])
+    if root is not None:
+        a[root], b[root] = ra, rb
+    return a, b, root, ra, rb
+
+
 def simulate(mask: np.ndarray, venation: Venation | None, p: RDParams, init=None, logger=None,
              progress_every: int = 500) -> RDResult:
     """Run Eq. 3.5 on the petal ``mask`` until stable (or ``max_steps``). ``init``: optional (a, b) maps."""
@@ -334,27 +357,13 @@ def simulate(mask: np.ndarray, venation: Venation | None, p: RDParams, init=None
         m_sub = max(1, int(np.ceil(p.dt * Dmax * 2.0 * float(np.abs(Lv.diagonal()).max()))))
     else:
         m_sub = 0
-    a0, b0 = p.steady_state()
-    rng = np.random.default_rng(p.seed)
-    if init is None:
-        a = (a0 * (1.0 + p.noise * rng.standard_normal(n))).astype(np.float32)
-        b = (b0 * (1.0 + p.noise * rng.standard_normal(n))).astype(np.float32)
-    else:
-        a = np.asarray(init[0], np.float32).ravel()[cells].copy()
-        b = np.asarray(init[1], np.float32).ravel()[cells].copy()
+    a, b, root, ra, rb = _initial_state(mask, venation, p, cells, init, np.float32)
     h, w = mask.shape
-    r0, c0 = venation.root if venation is not None else (-1, -1)
-    root = None
-    if 0 <= r0 < h and 0 <= c0 < w and mask[r0, c0] > 0.5:
-        root = int(np.searchsorted(cells, r0 * w + c0))
-    ra, rb = np.float32(a0 * p.root_supply[0]), np.float32(b0 * p.root_supply[1])
     f32 = np.float32
     sa, sb, ka, kb, beta, dt = f32(p.sa), f32(p.sb), f32(p.K_A), f32(p.K_B), f32(p.beta), f32(p.dt)
     dA, dB = f32(p.dt * p.D_A), f32(p.dt * p.D_B)
     sA, sB = f32(p.dt * p.D_A / max(m_sub, 1)), f32(p.dt * p.D_B / max(m_sub, 1))
     steps, res, history, converged = 0, np.inf, [], False
-    if root is not None:
-        a[root], b[root] = ra, rb
     for steps in range(1, p.max_steps + 1):
         a2b = a * a * b
         # reaction linearised per cell on its own species (diagonal Jacobian), diffusion explicit
@@ -395,23 +404,9 @@ def _simulate_implicit_entry(mask, venation, p, init, logger, progress_every):
     cells, _, mes, vsc = _edges(mask, venation, p.t, p.p_mm, p.p_mv, p.p_vv, p.n_dyadic)
     n = cells.size
     L = (_assemble(n, mes) + _assemble(n, vsc)).tocsr()
-    a0, b0 = p.steady_state()
-    rng = np.random.default_rng(p.seed)
-    if init is None:
-        a = a0 * (1.0 + p.noise * rng.standard_normal(n))
-        b = b0 * (1.0 + p.noise * rng.standard_normal(n))
-    else:
-        a = np.asarray(init[0], float).ravel()[cells].copy()
-        b = np.asarray(init[1], float).ravel()[cells].copy()
+    a, b, root, ra, rb = _initial_state(mask, venation, p, cells, init, np.float64)
     h, w = mask.shape
-    r0, c0 = venation.root if venation is not None else (-1, -1)
-    root = None
-    if 0 <= r0 < h and 0 <= c0 < w and mask[r0, c0] > 0.5:
-        root = int(np.searchsorted(cells, r0 * w + c0))
-    ra, rb = a0 * p.root_supply[0], b0 * p.root_supply[1]
-    if root is not None:
-        a[root], b[root] = ra, rb
-    a, b, steps, converged, res, history = _simulate_implicit(mask, venation, p, cells, L, a, b, root, ra, rb,
+    a, b, steps, converged, res, history = _simulate_implicit(p, cells, L, a, b, root, ra, rb,
                                                               logger, progress_every)
     A = np.zeros(h * w, np.float32)
     B = np.zeros(h * w, np.float32)
