@@ -1,6 +1,6 @@
 """Benchmark: a 549x528 petal to a stable pattern (Dong 2007 Table 3.2: petunia, 466 s on a 2007 PC;
 target <= 10 s on 2 cores). Measured: the four Fig. 3.3 presets (Table 3.3 + ``FIG_3_3_STATE``) with the
-implicit (Strang-split) scheme of ``simulate``, run until the max relative change per step < tol. Baseline in
+implicit (Strang-split, Anderson-accelerated) scheme of ``simulate``, run until the max relative change per step < tol. Baseline in
 the same run: the explicit scheme (dt = 1, the paper's per-iteration update, or its stability limit if smaller) on the same problem, timed per
 step over 20 steps and extrapolated to the same simulated time (steps x dt of the implicit run).
 Writes results/benchmarks/patterns.json."""
