@@ -8,9 +8,11 @@ vein width ``w`` (used by the transport function, Eq. 3.1) and its path length t
 vein (``dist``, pixels; used for the non-adjacent vascular connections of Eq. 3.1c).
 
 A venation can also be extracted from a photograph (§3.5: "we ... extract the shape and venation
-information"): a multi-scale ridge filter (Sato tubeness, scikit-image) of luminance, a threshold at a
-percentile inside the petal, and skeletonisation; the vein width comes from the distance transform of
-the thresholded ridge mask.
+information"): a multi-scale ridge filter (Sato tubeness, scikit-image) of log-luminance with local contrast
+normalisation, a threshold at a percentile inside the petal and skeletonisation give vein pieces; one
+minimum-cost-path run from the vein root over a cost that is low on strong ridges, traced back from every
+piece's tips, joins them into one tree rooted at the root (``venation_from_photo``); the vein width comes
+from the distance transform of the thresholded ridge mask.
 
 ``parametric_petal`` draws a petal outline procedurally: in polar coordinates around the base,
 ``r(phi) = L * sin(pi * s)^p * (1 + notch * cos(2 pi * lobes * s))`` with ``s`` the normalised opening
@@ -183,12 +185,14 @@ def venation_from_photo(luminance: np.ndarray, mask: np.ndarray, root_xy=(0.5, 0
     to the nearest petal pixel when it falls outside ``mask``).
 
     1. Ridges: Sato tubeness of log-luminance at ``sigmas`` (bright ridges unless ``bright_ridges`` is False),
-       0 outside the petal; ``r`` = response / its 99th percentile inside the petal, clipped to [0, 1].
+       0 outside the petal, divided by its local mean (Gaussian of ``contrast_radius`` x the larger side, plus
+       0.2 x the global mean; 0 disables) so out-of-focus parts of a photo keep their weaker ridges;
+       ``r`` = that / its 99th percentile inside the petal, clipped to [0, 1].
     2. Vein pieces: ``r`` above its ``percentile`` inside the petal, pieces of <= ``min_size`` pixels removed,
        skeletonised.
     3. Tree: one minimum-cost-path run (``skimage.graph.MCP_Geometric``, 8-connected, geometric step lengths)
-       from the root over the cost ``1 + off_ridge_cost * (1 - r)`` (cheap along strong ridges, 0 on skeleton
-       pixels' ridge deficit, impassable outside the petal), then the traceback to the root from every skeleton
+       from the root over the cost ``1 + off_ridge_cost * (1 - r)`` (cheap along strong ridges, 1 on the skeleton,
+       impassable outside the petal), then the traceback to the root from every skeleton
        tip (skeleton pixel with one skeleton neighbour) and from the farthest pixel of every skeleton piece (for
        loops without tips). All routes share one predecessor field, so their union is a tree.
     4. Cells: the route pixels are the vascular cells; where a route steps diagonally the corner pixel on the
