@@ -19,8 +19,13 @@ def main(snakemake, log):
              f"{0 if ven is None else int(ven.vascular.sum())} vascular; {p.to_dict()}")
     r = simulate(mask, ven, p, logger=log)
     log.info(f"{'converged' if r.converged else 'stopped'} after {r.steps} steps (residual {r.residual:.3g})")
-    maps = [normalise(r.a, mask), normalise(r.b, mask)]
-    attrs = {"rd": p.to_dict(), "steps": r.steps, "converged": int(r.converged)}
+    mode = spec.get("normalise", "max")
+    maps = [normalise(r.a, mask, mode=mode), normalise(r.b, mask, mode=mode)]
+    for k, (c, raw) in enumerate(zip(maps, (r.a, r.b))):
+        v = raw[mask > 0.5]
+        log.info(f"pigment {k}: C in [{v.min():.4g}, {v.max():.4g}] (C_min / C_max = {v.min() / v.max():.3f}); "
+                 f"normalised '{mode}'")
+    attrs = {"rd": p.to_dict(), "steps": r.steps, "converged": int(r.converged), "normalise": mode}
     for k, (out, c) in enumerate(zip(snakemake.output.maps, maps)):
         write_exr(out, np.stack([c, mask], -1), channels=["c", "A"], attrs={**attrs, "pigment": k},
                   stage="pigment_maps")

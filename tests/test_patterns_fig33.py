@@ -88,3 +88,21 @@ def test_bad_scheme_is_refused():
     from natscene.io import InputError
     with pytest.raises(InputError, match="scheme"):
         simulate(np.ones((8, 8), np.float32), None, RDParams(scheme="rk4"))
+
+
+def test_normalisation_modes():
+    """'max' is Dong's c = C / C_0 (C_0 = the petal maximum); 'range' puts the petal minimum at c = 0."""
+    from natscene.io import InputError
+    from natscene.patterns.reaction_diffusion import normalise
+    mask = np.zeros((4, 5), np.float32)
+    mask[1:3, 1:4] = 1
+    conc = np.linspace(2.0, 4.0, 20, dtype=np.float32).reshape(4, 5)
+    inside = mask > 0
+    c = normalise(conc, mask)
+    assert np.allclose(c[inside], conc[inside] / conc[inside].max()) and (c[~inside] == 0).all()
+    r = normalise(conc, mask, mode="range")
+    assert r[inside].min() == 0 and np.isclose(r[inside].max(), 1) and (r[~inside] == 0).all()
+    lo, hi = conc[inside].min(), conc[inside].max()
+    assert np.allclose(r[inside], (conc[inside] - lo) / (hi - lo), atol=1e-6)
+    with pytest.raises(InputError, match="normalisation"):
+        normalise(conc, mask, mode="log")

@@ -55,5 +55,23 @@ rule recolour:
         script_path("recolour.py")
 
 
+rule pattern_sheet:
+    input:
+        maps=[f"{RESULTS}/patterns/{n}/pigment_{p}.exr" for n in config["patterns"] for p in (0, 1)],
+        colors=[f"{RESULTS}/patterns/{n}/color.exr" for n in config["patterns"]],
+    output:
+        f"{RESULTS}/patterns/sheet.png",
+    params:
+        names=list(config["patterns"]),
+        code=fingerprint("io"),
+    log:
+        f"{RESULTS}/logs/pattern_sheet.log",
+    threads: 1
+    script:
+        script_path("pattern_sheet.py")
+
+
 ALL_TARGETS.extend(expand(f"{RESULTS}/patterns/{{pattern}}/preview.png", pattern=config["patterns"]))
+if config["patterns"]:
+    ALL_TARGETS.append(f"{RESULTS}/patterns/sheet.png")
 ALL_TARGETS.extend(expand(f"{RESULTS}/patterns/recolour/{{photo}}/recoloured.png", photo=config["recolour"]))
