@@ -2,7 +2,8 @@
 
 Every ``scripts/*.py`` ends with ``run(snakemake, main)``. A :class:`natscene.io.InputError` or
 :class:`natscene.config.ConfigError` (bad input, named by file or key) is reported as one line without a
-traceback and the job fails; anything else is a bug and keeps its traceback.
+traceback and the job fails; anything else is a bug and keeps its traceback (on the terminal and in
+the rule's log file).
 """
 from __future__ import annotations
 
@@ -48,3 +49,11 @@ def run(snakemake, main) -> None:
     except (InputError, ConfigError) as e:
         logger.error(f"rule {snakemake.rule}: {e}")
         sys.exit(1)
+    except Exception:
+        # a bug: keep the traceback, in the rule's log file too (Snakemake points the user there)
+        if log_path:
+            file_handlers = [h for h in logger.handlers if isinstance(h, logging.FileHandler)]
+            for h in file_handlers:
+                h.handle(logger.makeRecord(logger.name, logging.ERROR, __file__, 0,
+                                           f"rule {snakemake.rule} failed:", None, sys.exc_info()))
+        raise
