@@ -46,3 +46,11 @@ def test_bad_values_name_the_key(smoke, mutate, key, words):
         validate_config(cfg, SCHEMA, source="smoke.yaml")
     msg = str(e.value)
     assert f"'{key}'" in msg and words in msg and "smoke.yaml" in msg
+
+
+def test_recolour_library_defaults_match_the_schema():
+    """natscene.patterns.recolour.DEFAULTS (for library calls) and the schema the workflow fills from agree."""
+    from natscene.patterns.recolour import DEFAULTS
+    cfg = validate_config({"recolour": {"x": {"photo": "p.jpg"}}}, SCHEMA)
+    filled = {k: v for k, v in cfg["recolour"]["x"].items() if k != "photo"}
+    assert filled == DEFAULTS

@@ -63,7 +63,7 @@ rule pattern_sheet:
         f"{RESULTS}/patterns/sheet.png",
     params:
         names=list(config["patterns"]),
-        code=fingerprint("io"),
+        code=fingerprint("io", "color"),
     log:
         f"{RESULTS}/logs/pattern_sheet.log",
     threads: 1

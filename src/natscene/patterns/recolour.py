@@ -55,8 +55,6 @@ def standard_concentration(conc: np.ndarray, mask: np.ndarray, percentile: float
 
 def vein_contrast(c: np.ndarray, vascular: np.ndarray, mask: np.ndarray, gap: int = 4) -> tuple[float, float]:
     """(mean of ``c`` on the vascular cells, mean of ``c`` on petal cells more than ``gap`` cells from any vein)."""
-    from scipy import ndimage
-
     vas = np.asarray(vascular, bool) & (np.asarray(mask) > 0.5)
     far = (np.asarray(mask) > 0.5) & ~ndimage.binary_dilation(vas, iterations=gap)
     return (float(c[vas].mean()) if vas.any() else float("nan"),
@@ -87,7 +85,8 @@ def recolour(photo_linear: np.ndarray, colour_linear: np.ndarray, base_linear: n
     return np.where(m, rgb, photo_linear[..., :3]).astype(np.float32)
 
 
-#: defaults of a ``recolour`` config entry (workflow/schemas/recolour.schema.yaml carries the same values)
+#: defaults of a ``recolour`` config entry for library calls (the workflow fills them from
+#: workflow/schemas/recolour.schema.yaml; tests/test_config.py checks the two agree)
 DEFAULTS = dict(sim_width=160, root=[0.37, 0.42], s_min=0.35, v_min=0.08, rd={"preset": "radial_stripes"},
                 pigments=["anthocyanin", "blank"], concentration=1.0, c0_percentile=99.0)
 
