@@ -8,12 +8,14 @@ ROOT = Path(workflow.basedir).resolve()
 sys.path.insert(0, str(ROOT / "src"))  # the library, also when the package is not pip-installed
 
 from natscene.config import load_yaml_config, resolve_path, validate_config
-from natscene.fingerprint import fingerprint
+from natscene.config_checks import check_config
+from natscene.fingerprint import script_fingerprint as _script_fingerprint
 
 if not config:  # no --configfile given: the main job on the bundled example
     config.update(load_yaml_config(ROOT / "config" / "config.yaml"))
-validate_config(config, ROOT / "workflow" / "schemas" / "config.schema.yaml",
-                source=", ".join(map(str, workflow.configfiles)) or "config/config.yaml")
+_CONFIG_SOURCE = ", ".join(map(str, workflow.configfiles)) or "config/config.yaml"
+validate_config(config, ROOT / "workflow" / "schemas" / "config.schema.yaml", source=_CONFIG_SOURCE)
+check_config(config, ROOT, source=_CONFIG_SOURCE)  # cross-references, input files, geometry: before any job
 
 RESULTS = config["results"]
 ALL_TARGETS = []  # each rule file appends the final products it wants built by `rule all`
@@ -26,6 +28,11 @@ def src(path):
 
 def script_path(name):
     return str(ROOT / "scripts" / name)
+
+
+def script_fingerprint(name):
+    """Hash of every natscene module the rule script `name` can import (natscene.fingerprint)."""
+    return _script_fingerprint(ROOT / "scripts" / name)
 
 
 for _rules in sorted((ROOT / "workflow" / "rules").glob("*.smk")):

@@ -23,7 +23,7 @@ def main(snakemake, log):
     t_h = time.perf_counter() - t0
     cov = spectral_coverage(hybrid)
     attrs = {"composite": snakemake.wildcards.name, "frame": frame, "spp": spec.spp, "upsampling": spec.upsampling,
-             "spectral_coverage": cov, "render_seconds": t_h, "objects": entry.get("objects", []),
+             "spectral_coverage": cov, "objects": entry.get("objects", []),
              "variant": renderer.tracer.variant}
     log.info(f"hybrid render {t_h:.2f} s (first call in the process: includes kernel compilation), spectral "
              f"pixels {100 * cov:.1f}%")

@@ -24,7 +24,10 @@ def main(snakemake, log):
     fit = fit_keyframe(tables, photo, np.rint(label) == 1, sky, sun["c_in"], settings, seed=kf.get("seed", 0),
                        rank=kf.get("rank", 1), method=kf.get("method"), log=log.info)
     res, params, images = fit["result"], fit["params"], fit["images"]
-    params = {"keyframe": par.name, "photo": kf["photo"], "volume": kf["volume"], "view": kf["view"], **params}
+    params = {"keyframe": par.name, "photo": kf["photo"], "volume": kf["volume"], "view": kf["view"], **params,
+              "warnings": [f"sky ({inp.sun}): {w}" for w in sun.get("warnings") or []]}
+    for w in params["warnings"]:
+        log.warning(w)
     io.write_yaml(out.params, params)
     chans = [f"rank{i + 1}.{c}" for i in range(len(images)) for c in "RGB"]
     h, w = images.shape[1:3]

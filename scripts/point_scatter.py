@@ -35,7 +35,7 @@ def main(snakemake, log):
         "volume": snakemake.wildcards.volume, "sun": sun, "phase": phase, "points": len(pts.density),
         "lattice": list(pts.shape), "spacing": pts.spacing, "sigma_e": pts.sigma_e,
         "sun_in": pts.sun_in, "energy_per_pass_G": sol.energy[:, 1], "mean_ratio": float(sol.ratio.mean()),
-        "seconds": elapsed, "settings": s})
+        "settings": s})
 
 
 run(snakemake, main)  # noqa: F821

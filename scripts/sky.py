@@ -20,7 +20,7 @@ def main(snakemake, log):
         raw = io.read_exr(mpath).pixels  # no colour decoding: painted values as stored, in [0, 1]
         hand = decode_hand_mask(raw, photo.shape[:2], name=f"{mpath} (photos.{name}.mask)")
         log.info(f"hand-painted mask {mpath}")
-    res = extract_sky(photo, settings, hand, name=f"{photo_path} (photos.{name})")
+    res = extract_sky(photo, settings, hand, name=f"{photo_path} (photos.{name})", key=f"photos.{name}")
     summary = res.summary()
     for w in res.warnings:
         log.warning(f"{name}: {w}")

@@ -62,3 +62,20 @@ def srgb_to_yiq(rgb: np.ndarray) -> np.ndarray:
 def yiq_to_srgb(yiq: np.ndarray) -> np.ndarray:
     """YIQ (NTSC) -> RGB, the exact inverse of :func:`srgb_to_yiq`."""
     return (np.asarray(yiq, np.float64) @ YIQ_TO_RGB.T).astype(np.float32)
+
+
+def cct_duv(rgb) -> tuple[float, float]:
+    """Correlated colour temperature (K) and Duv (signed distance from the Planckian locus in CIE 1960 uv;
+    positive = greener) of a linear sRGB colour, by Ohno (2013) through colour-science.
+
+    Daylight and direct sunlight sit close to the locus (|Duv| < 0.01): about 5000-7000 K at midday,
+    2000-3500 K near sunset (CIE 15:2004; Wyszecki & Stiles 1982).
+    """
+    import warnings
+
+    xyz = linear_srgb_to_xyz(np.asarray(rgb, np.float32).reshape(3)).astype(np.float64)
+    uv = colour.UCS_to_uv(colour.XYZ_to_UCS(xyz))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        cct, duv = colour.uv_to_CCT(uv, method="Ohno 2013")
+    return float(cct), float(duv)

@@ -1,35 +1,139 @@
-"""Code fingerprints for Snakemake rerun triggers.
+"""Code fingerprints for Snakemake rerun triggers, computed from the code itself.
 
 Snakemake tracks a rule's script but not the library it imports. Every rule passes
-``fingerprint(<domains>)`` as a ``param``: a hash of the *content* of the library modules that rule uses,
-so editing one of them (not merely touching its mtime) makes Snakemake rerun exactly the rules that
-depend on it.
+``code=script_fingerprint("<script>.py")`` as a ``param``: a hash of the *content* of every ``natscene``
+module the script can execute, so editing one of them (not merely touching its mtime) makes Snakemake
+rerun exactly the rules that depend on it, and no hand-kept list can drift from the imports.
+
+The set of modules (the script's *import closure* inside ``natscene``) is found by parsing the source with
+:mod:`ast`, never by importing it: every ``import natscene.x`` / ``from natscene.x import y`` / relative
+import, at module level or inside a function (lazy imports count), and every
+``importlib.import_module("natscene.x")`` with a literal name; then the same for each module found,
+transitively. Importing ``natscene.a.b`` also executes the package ``__init__`` files on the way
+(``natscene/__init__.py``, ``natscene/a/__init__.py``), so those are part of the closure too.
 """
 from __future__ import annotations
 
+import ast
 import hashlib
 from functools import lru_cache
 from pathlib import Path
 
+PACKAGE = "natscene"
 PACKAGE_DIR = Path(__file__).resolve().parent
 
 
+def _module_file(dotted: str, package_dir: Path) -> Path | None:
+    """The source file of ``natscene.<...>`` (module or package ``__init__``), or None."""
+    parts = dotted.split(".")
+    if parts[0] != PACKAGE:
+        return None
+    base = package_dir.joinpath(*parts[1:])
+    if (base / "__init__.py").is_file():
+        return base / "__init__.py"
+    f = base.with_suffix(".py")
+    return f if len(parts) > 1 and f.is_file() else None
+
+
+def _with_parents(dotted: str) -> list[str]:
+    """``a.b.c`` -> ``[a, a.b, a.b.c]``: importing a module runs its packages' ``__init__`` first."""
+    parts = dotted.split(".")
+    return [".".join(parts[:i]) for i in range(1, len(parts) + 1)]
+
+
+def _module_name(path: Path, package_dir: Path) -> str | None:
+    try:
+        rel = path.resolve().relative_to(package_dir)
+    except ValueError:
+        return None  # a script outside the package
+    parts = list(rel.with_suffix("").parts)
+    if parts and parts[-1] == "__init__":
+        parts = parts[:-1]
+    return ".".join([PACKAGE, *parts])
+
+
+def imported_names(source: str, module: str | None = None, is_package: bool = False) -> set[str]:
+    """Dotted ``natscene`` names a source text can import (anywhere in the file), before resolution.
+
+    ``module``: the dotted name of the file itself (for relative imports); None for a script.
+    ``from pkg import name`` yields both ``pkg`` and ``pkg.name`` (the name may be a submodule; names
+    that are not modules are dropped when resolved to files).
+    """
+    tree = ast.parse(source)
+    names: set[str] = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            names.update(a.name for a in node.names)
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                if module is None:
+                    continue  # a relative import in a script: not inside natscene
+                pkg = module.split(".") if is_package else module.split(".")[:-1]
+                pkg = pkg[:len(pkg) - (node.level - 1)] if node.level > 1 else pkg
+                base = ".".join(pkg + ([node.module] if node.module else []))
+            else:
+                base = node.module or ""
+            names.add(base)
+            names.update(f"{base}.{a.name}" for a in node.names if a.name != "*")
+        elif isinstance(node, ast.Call):
+            f = node.func
+            fname = f.attr if isinstance(f, ast.Attribute) else (f.id if isinstance(f, ast.Name) else "")
+            if fname in ("import_module", "__import__") and node.args and isinstance(node.args[0], ast.Constant) \
+                    and isinstance(node.args[0].value, str):
+                names.add(node.args[0].value)
+    return {n for n in names if n == PACKAGE or n.startswith(PACKAGE + ".")}
+
+
 @lru_cache(maxsize=None)
-def _files(domain: str) -> tuple[Path, ...]:
-    d = PACKAGE_DIR / domain.replace(".", "/")
-    if d.is_dir():
-        return tuple(sorted(d.rglob("*.py")))
-    f = d.with_suffix(".py")
-    if f.is_file():
-        return (f,)
-    raise ValueError(f"fingerprint: no module or package 'natscene.{domain}'")
+def _direct(path: Path, package_dir: Path) -> tuple[Path, ...]:
+    """natscene files imported directly by ``path`` (with their packages' ``__init__`` files)."""
+    module = _module_name(path, package_dir)
+    names = imported_names(path.read_text(), module, path.name == "__init__.py")
+    files = set()
+    for name in names:
+        for dotted in _with_parents(name):
+            f = _module_file(dotted, package_dir)
+            if f is not None:
+                files.add(f)
+    if module is not None:  # a module's own packages run before it
+        for dotted in _with_parents(module)[:-1]:
+            f = _module_file(dotted, package_dir)
+            if f is not None:
+                files.add(f)
+    return tuple(sorted(files))
 
 
-def fingerprint(*domains: str) -> str:
-    """sha256 (16 hex digits) of the source of ``natscene.<domain>`` for each domain (package or module)."""
+def import_closure(path: str | Path, package_dir: str | Path = PACKAGE_DIR) -> tuple[Path, ...]:
+    """Every ``natscene`` source file that ``path`` (a script or a module) can execute, sorted."""
+    package_dir = Path(package_dir).resolve()
+    start = Path(path).resolve()
+    seen: set[Path] = set()
+    todo = [start]
+    while todo:
+        cur = todo.pop()
+        for f in _direct(cur, package_dir):
+            if f not in seen:
+                seen.add(f)
+                todo.append(f)
+    seen.discard(start)
+    return tuple(sorted(seen))
+
+
+def closure_modules(path: str | Path, package_dir: str | Path = PACKAGE_DIR) -> list[str]:
+    """The import closure of ``path`` as dotted module names (for messages and tests)."""
+    package_dir = Path(package_dir).resolve()
+    return sorted(_module_name(f, package_dir) for f in import_closure(path, package_dir))
+
+
+def script_fingerprint(script: str | Path, package_dir: str | Path = PACKAGE_DIR) -> str:
+    """sha256 (16 hex digits) of the content of every natscene file in the script's import closure.
+
+    The script itself is not hashed: Snakemake already tracks a rule's script.
+    """
+    package_dir = Path(package_dir).resolve()
     h = hashlib.sha256()
-    for domain in sorted(set(domains)):
-        for f in _files(domain):
-            h.update(str(f.relative_to(PACKAGE_DIR)).encode())
-            h.update(f.read_bytes())
+    for f in import_closure(script, package_dir):
+        h.update(str(f.relative_to(package_dir)).encode())
+        h.update(b"\0")
+        h.update(f.read_bytes())
     return h.hexdigest()[:16]

@@ -3,7 +3,13 @@
 - EXR read/write with any number of named channels, float32 or half, header attributes recording the
   stage, its parameters and the library version;
 - every writer is atomic: it writes a temporary file beside the target and renames it, so an
-  interrupted or failing job never leaves a half-written file that Snakemake would take as done;
+  interrupted or failing job never leaves a half-written file that Snakemake would take as done; the
+  temporary files a killed job left behind are removed by the next run of that job
+  (:func:`remove_stale_temps`, called by :mod:`natscene.runner` for every output);
+- outputs are byte-identical across reruns: no wall-clock time in any header (OpenImageIO's EXR writer
+  would add a ``DateTime``/``capDate`` attribute; :func:`write_exr` suppresses it);
+- a photo or texture that its decoder reports as damaged (a truncated JPEG, which libjpeg would otherwise
+  fill with grey, a PNG cut short) is refused with the file's name (:func:`check_complete`);
 - photographs (JPEG, PNG 8/16-bit, EXR) are read to linear float32 (sRGB decoding by colour-science);
 - PNG previews: linear -> exposure -> clip -> sRGB encoding, 8 bit. The default exposure maps the
   99.5th percentile of luminance to 1 ("auto"), documented in the README.
@@ -13,6 +19,7 @@ from __future__ import annotations
 import contextlib
 import json
 import os
+import re
 import tempfile
 from pathlib import Path
 from typing import Iterator, Mapping, NamedTuple, Sequence
@@ -48,6 +55,30 @@ class Image(NamedTuple):
 
 
 # ----------------------------------------------------------------------------------------- atomic
+def _temp_prefix(path: Path) -> str:
+    return f".{path.stem}."
+
+
+def remove_stale_temps(path: str | os.PathLike) -> list[Path]:
+    """Remove the temporary files :func:`atomic_path` left beside ``path`` in an earlier, killed run.
+
+    Only names of the exact form ``.{stem}.XXXXXXXX{suffix}`` (``tempfile.mkstemp``'s 8 random
+    characters) are removed. Snakemake runs one job per output at a time, so no live writer owns them.
+    Returns the removed paths.
+    """
+    path = Path(path)
+    if not path.parent.is_dir():
+        return []
+    pattern = re.compile(re.escape(_temp_prefix(path)) + r"[a-z0-9_]{8}" + re.escape(path.suffix or ".tmp") + "$")
+    removed = []
+    for f in path.parent.iterdir():
+        if pattern.match(f.name) and f.is_file():
+            with contextlib.suppress(FileNotFoundError):
+                f.unlink()
+                removed.append(f)
+    return removed
+
+
 @contextlib.contextmanager
 def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
     """Yield a temporary path beside ``path`` (same extension); rename it onto ``path`` on success.
@@ -63,7 +94,7 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
     if not os.access(path.parent, os.W_OK):
         raise InputError(f"output directory {path.parent} is not writable; fix its permissions or run "
                          f"the workflow in a writable directory (snakemake --directory).")
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=path.suffix or ".tmp", dir=path.parent)
+    fd, tmp = tempfile.mkstemp(prefix=_temp_prefix(path), suffix=path.suffix or ".tmp", dir=path.parent)
     os.close(fd)
     tmp = Path(tmp)
     try:
@@ -148,6 +179,7 @@ def write_exr(path: str | os.PathLike, pixels: np.ndarray, channels: Sequence[st
     spec = oiio.ImageSpec(w, h, c, oiio.HALF if half else oiio.FLOAT)
     spec.channelnames = tuple(names)
     spec.attribute("compression", "zip")
+    spec.attribute("DateTime", "")  # an empty value keeps OpenImageIO from stamping the wall-clock time
     spec.attribute(ATTR_PREFIX + "version", __version__)
     # OpenEXR stores channels sorted by name; remember the order they were given in.
     spec.attribute(ATTR_PREFIX + "channel_order", ",".join(names))
@@ -181,18 +213,74 @@ def _attr_value(v):
     return v
 
 
+def check_complete(path: str | os.PathLike, data: bytes | None = None) -> None:
+    """Refuse a JPEG or PNG whose byte stream is cut short (InputError naming the file).
+
+    JPEG: the end-of-image marker (FF D9) must follow the first start-of-scan of the *main* image (marker
+    segments are walked by their lengths, so an EXIF thumbnail's own markers do not count; inside
+    entropy-coded data FF is always stuffed, so FF D9 there is the real end). PNG: the IEND chunk must be
+    present. Other formats rely on their decoder's error state (see :func:`_read_pixels`).
+    """
+    path = Path(path)
+    if data is None:
+        with open(path, "rb") as f:
+            data = f.read()
+    if data[:2] == b"\xff\xd8":  # JPEG
+        i, n = 2, len(data)
+        while i + 4 <= n:
+            if data[i] != 0xFF:
+                break  # not a marker where one must be: let the decoder judge
+            marker = data[i + 1]
+            if marker == 0xFF:  # fill byte
+                i += 1
+                continue
+            if marker in (0xD8, 0x01) or 0xD0 <= marker <= 0xD7:
+                i += 2
+                continue
+            if marker == 0xD9:
+                raise InputError(f"{path}: JPEG ends before its image data; the file is damaged. Re-export it")
+            seg = int.from_bytes(data[i + 2:i + 4], "big")
+            if marker == 0xDA:  # start of scan: the main image's data follows
+                if data.find(b"\xff\xd9", i + 2 + seg) < 0:
+                    raise InputError(f"{path}: truncated JPEG ({n} bytes, no end-of-image marker): the decoder "
+                                     f"would fill the missing part with grey. Copy or download the file again")
+                return
+            i += 2 + seg
+        raise InputError(f"{path}: truncated JPEG ({n} bytes, no image data): copy or download the file again")
+    if data[:8] == b"\x89PNG\r\n\x1a\n" and b"IEND" not in data[-64:]:
+        raise InputError(f"{path}: truncated PNG ({len(data)} bytes, no IEND chunk): copy or export the file again")
+
+
+def _decoder_error(inp) -> str:
+    """The decoder's error message, '' if none (``has_error`` is a property in OIIO 3.x, a method before)."""
+    has = getattr(inp, "has_error", None)
+    has = has() if callable(has) else has
+    msg = inp.geterror() if (has is None or has) else ""
+    return (msg or "").strip()
+
+
 def _read_pixels(path: Path, what: str, fmt=oiio.FLOAT):
-    """Open any OIIO-readable image; return (pixels (H, W, C) in ``fmt``, spec), or raise InputError."""
+    """Open any OIIO-readable image; return (pixels (H, W, C) in ``fmt``, spec), or raise InputError.
+
+    A decoder error or warning (e.g. libjpeg's "Premature end of JPEG file", after which it fills the rest
+    of the image with grey) is an error naming the file, as is a truncated byte stream (:func:`check_complete`).
+    """
     if not path.is_file():
         raise InputError(f"{path}: {what} not found")
+    with open(path, "rb") as f:
+        head = f.read(8)
+    if head[:2] == b"\xff\xd8" or head == b"\x89PNG\r\n\x1a\n":  # JPEG or PNG, whatever the name says
+        check_complete(path)
     inp = oiio.ImageInput.open(str(path))
     if inp is None:
         raise InputError(f"{path}: not a readable image ({oiio.geterror().strip() or 'unknown format'})")
     try:
         spec = inp.spec()
         pixels = inp.read_image(0, 0, 0, spec.nchannels, fmt)
-        if pixels is None:
-            raise InputError(f"{path}: cannot decode pixels ({inp.geterror()})")
+        err = _decoder_error(inp)
+        if pixels is None or err:
+            raise InputError(f"{path}: cannot decode the {what}: {err or 'unknown decoder error'}. The file is "
+                             f"damaged or truncated; copy or export it again")
     finally:
         inp.close()
     dtype = np.uint8 if fmt == oiio.UINT8 else np.float32

@@ -1,9 +1,10 @@
 """The thin-script harness: logging to the rule's log file and the terminal, clean error reporting.
 
-Every ``scripts/*.py`` ends with ``run(snakemake, main)``. A :class:`natscene.io.InputError` or
-:class:`natscene.config.ConfigError` (bad input, named by file or key) is reported as one line without a
-traceback and the job fails; anything else is a bug and keeps its traceback (on the terminal and in
-the rule's log file).
+Every ``scripts/*.py`` ends with ``run(snakemake, main)``. Before ``main`` runs, the temporary files that an
+earlier, killed run of the same job left beside its outputs are removed (:func:`natscene.io.remove_stale_temps`).
+A :class:`natscene.io.InputError` or :class:`natscene.config.ConfigError` (bad input, named by file or key) is
+reported as one line without a traceback and the job fails; anything else is a bug and keeps its traceback
+(on the terminal and in the rule's log file).
 """
 from __future__ import annotations
 
@@ -13,7 +14,7 @@ import time
 from pathlib import Path
 
 from natscene.config import ConfigError
-from natscene.io import InputError
+from natscene.io import InputError, remove_stale_temps
 
 
 def setup_logging(log_path: str | None, name: str = "natscene") -> logging.Logger:
@@ -44,6 +45,9 @@ def run(snakemake, main) -> None:
     """Call ``main(snakemake, logger)``; report bad input in one line and exit non-zero."""
     log_path = snakemake.log[0] if len(snakemake.log) else None
     logger = setup_logging(log_path)
+    for out in snakemake.output:
+        for f in remove_stale_temps(out):
+            logger.info(f"removed {f}, left by an earlier interrupted run of this job")
     try:
         main(snakemake, logger)
     except (InputError, ConfigError) as e:

@@ -33,7 +33,7 @@ rule composite:
         entry=lambda wc: config["composite"][wc.name],
         results=RESULTS,
         root=str(ROOT),
-        code=fingerprint("composite", "spectral", "io", "geometry", "color"),
+        code=script_fingerprint("composite.py"),
     log:
         f"{RESULTS}/logs/composite/{{name}}.{{frame}}.log",
     threads: 2
@@ -58,7 +58,7 @@ rule composite_reference:
         entry=lambda wc: config["composite"][wc.name],
         results=RESULTS,
         root=str(ROOT),
-        code=fingerprint("composite", "spectral", "io", "geometry", "color"),
+        code=script_fingerprint("composite_reference.py"),
     log:
         f"{RESULTS}/logs/composite_reference/{{name}}.{{frame}}.log",
     threads: 2

@@ -47,7 +47,7 @@ rule fit:
         name=lambda wc: wc.keyframe,
         keyframe=lambda wc: _keyframe(wc),
         settings=config.get("fit", {}),
-        code=fingerprint("fit", "scatter", "io", "color"),
+        code=script_fingerprint("fit.py"),
     log:
         f"{RESULTS}/logs/fit/{{keyframe}}.log",
     threads: 1

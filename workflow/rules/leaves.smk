@@ -11,7 +11,7 @@ rule leaf_season:
         case=lambda wc: config["leaves"]["cases"][wc.climate],
         dates=config["leaves"]["dates"],
         seed=config["seed"],
-        code=fingerprint("leaves", "patterns", "io", "color"),
+        code=script_fingerprint("leaf_season.py"),
     log:
         f"{RESULTS}/logs/leaf_season/{{climate}}.log",
     threads: 1

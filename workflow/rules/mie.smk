@@ -28,7 +28,7 @@ rule mie_table:
         polar=f"{RESULTS}/mie/table_polar.png",
     params:
         settings=lambda wc: config["mie"]["table"],
-        code=fingerprint("mie", "io"),
+        code=script_fingerprint("mie_table.py"),
     log:
         f"{RESULTS}/logs/mie/table.log",
     threads: 1
@@ -61,7 +61,7 @@ rule mie_table_droplets:
     params:
         # RGB only (the renderer's channels): the population's r_eff, v_eff over the default settings
         settings=lambda wc: {**config["mie"]["table"], **config["mie"]["droplets"][wc.droplets], "spectral_nm": []},
-        code=fingerprint("mie", "io"),
+        code=script_fingerprint("mie_table.py"),
     log:
         f"{RESULTS}/logs/mie/table_{{droplets}}.log",
     threads: 1
@@ -78,7 +78,7 @@ rule mie_deck:
     params:
         deck=lambda wc: config["mie"]["deck"],
         sigma_t=lambda wc: config["mie"]["solver"]["sigma_t"],
-        code=fingerprint("mie", "io", "volume"),
+        code=script_fingerprint("mie_deck.py"),
     log:
         f"{RESULTS}/logs/mie/deck.log",
     threads: 1
@@ -100,7 +100,7 @@ rule point_scatter:
     params:
         settings=lambda wc: config["mie"]["solver"],
         sun=_mie_sun,
-        code=fingerprint("mie", "io", "volume", "geometry"),
+        code=script_fingerprint("point_scatter.py"),
     log:
         f"{RESULTS}/logs/mie/point_scatter/{{volume}}_{{sun}}_{{phase}}.log",
     threads: 2
@@ -132,7 +132,7 @@ rule mie_render:
     params:
         demo=lambda wc: config["mie"]["demo"],
         render=lambda wc: config["mie"]["render"],
-        code=fingerprint("mie", "io", "volume", "geometry"),
+        code=script_fingerprint("mie_render.py"),
     log:
         f"{RESULTS}/logs/mie/render/{{volume}}_{{shot}}.log",
     threads: 2

@@ -8,7 +8,7 @@ rule pigment_maps:
         spec=lambda wc: config["patterns"][wc.pattern],
         seed=config["seed"],
         root=str(ROOT),
-        code=fingerprint("patterns", "io"),
+        code=script_fingerprint("pigment_maps.py"),
     log:
         f"{RESULTS}/logs/pigment_maps/{{pattern}}.log",
     threads: 2
@@ -26,7 +26,7 @@ rule pattern_color:
         preview=f"{RESULTS}/patterns/{{pattern}}/preview.png",
     params:
         spec=lambda wc: config["patterns"][wc.pattern],
-        code=fingerprint("patterns", "io", "color"),
+        code=script_fingerprint("pattern_color.py"),
     log:
         f"{RESULTS}/logs/pattern_color/{{pattern}}.log",
     threads: 1
@@ -45,7 +45,7 @@ rule recolour:
     params:
         spec=lambda wc: config["recolour"][wc.photo],
         seed=config["seed"],
-        code=fingerprint("patterns", "io", "color"),
+        code=script_fingerprint("recolour.py"),
     log:
         f"{RESULTS}/logs/recolour/{{photo}}.log",
     threads: 2
@@ -63,7 +63,7 @@ rule pattern_sheet:
         f"{RESULTS}/patterns/sheet.png",
     params:
         names=list(config["patterns"]),
-        code=fingerprint("io", "color"),
+        code=script_fingerprint("pattern_sheet.py"),
     log:
         f"{RESULTS}/logs/pattern_sheet.log",
     threads: 1

@@ -17,7 +17,7 @@ rule precompute:
     params:
         view=lambda wc: config["views"][wc.view],
         settings=_precompute_settings(),
-        code=fingerprint("scatter", "volume", "geometry", "io", "variant"),
+        code=script_fingerprint("precompute.py"),
     log:
         f"{RESULTS}/logs/precompute/{{volume}}/{{view}}.log",
     threads: config["threads"]

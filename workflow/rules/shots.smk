@@ -66,7 +66,7 @@ rule interpolate:
         path_keys=_shot_path_keys,
         easing=lambda wc: config["shots"][wc.shot]["easing"],
         camera_path=lambda wc: config["shots"][wc.shot]["camera_path"],
-        code=fingerprint("keyframes", "geometry", "io"),
+        code=script_fingerprint("interpolate.py"),
     log:
         f"{RESULTS}/logs/shots/{{shot}}/interpolate.{{frame}}.log",
     threads: 1
@@ -92,7 +92,7 @@ rule render_frame:
         render=lambda wc: config["shots"][wc.shot]["render"],
         sky=lambda wc: config["shots"][wc.shot]["sky"],
         exposure=lambda wc: config["shots"][wc.shot]["exposure"],
-        code=fingerprint("keyframes", "scatter", "volume", "geometry", "io", "color", "variant"),
+        code=script_fingerprint("render_frame.py"),
     log:
         f"{RESULTS}/logs/shots/{{shot}}/render_frame.{{frame}}.log",
     threads: config["threads"]
@@ -114,7 +114,7 @@ rule animation:
     params:
         fps=lambda wc: config["shots"][wc.shot]["fps"],
         filmstrip=lambda wc: config["shots"][wc.shot]["filmstrip"],
-        code=fingerprint("keyframes", "io"),
+        code=script_fingerprint("animation.py"),
     log:
         f"{RESULTS}/logs/shots/{{shot}}/animation.log",
     threads: 1

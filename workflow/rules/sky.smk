@@ -28,9 +28,10 @@ rule sky:
         mask=lambda wc: [src(_photo(wc)["mask"])] if _photo(wc).get("mask") else [],
     params:
         settings=lambda wc: {**{k: v for k, v in config.get("sky", {}).items() if k != "fit_resolutions"},
-                             **({"threshold": _photo(wc)["threshold"]} if _photo(wc).get("threshold") is not None else {})},
+                             **({"threshold": _photo(wc)["threshold"]} if _photo(wc).get("threshold") is not None else {}),
+                             "accept_unusual": bool(_photo(wc).get("accept_unusual", False))},
         name=lambda wc: wc.photo,
-        code=fingerprint("sky", "io", "color"),
+        code=script_fingerprint("sky.py"),
     log:
         f"{RESULTS}/logs/sky/{{photo}}.log",
     threads: 1
@@ -53,7 +54,7 @@ rule sky_resample:
         W=r"\d+",
         H=r"\d+",
     params:
-        code=fingerprint("sky", "io", "color"),
+        code=script_fingerprint("sky_resample.py"),
     log:
         f"{RESULTS}/logs/sky/{{photo}}_{{W}}x{{H}}.log",
     threads: 1

@@ -10,7 +10,7 @@ rule tileset:
         embed=lambda wc: [src(e["path"]) for e in config["tiles"][wc.texture]["embed"]],
     params:
         spec=lambda wc: config["tiles"][wc.texture],
-        code=fingerprint("tiles", "io", "color"),
+        code=script_fingerprint("tileset.py"),
     log:
         f"{RESULTS}/logs/tileset/{{texture}}.log",
     threads: 1
@@ -32,7 +32,7 @@ rule tile_texture:
         h=r"\d+",
     params:
         seed=lambda wc: config["tiles"][wc.texture]["seed"],
-        code=fingerprint("tiles", "io"),
+        code=script_fingerprint("tile_texture.py"),
     log:
         f"{RESULTS}/logs/tile_texture/{{texture}}_{{w}}x{{h}}.log",
     threads: 1

@@ -11,7 +11,7 @@ rule volume:
         lambda wc: [src(config["volumes"][wc.volume]["path"])] if config["volumes"][wc.volume]["kind"] == "file" else [],
     params:
         spec=lambda wc: config["volumes"][wc.volume],
-        code=fingerprint("volume", "io"),
+        code=script_fingerprint("volume.py"),
     log:
         f"{RESULTS}/logs/volume/{{volume}}.log",
     threads: 2

@@ -1,6 +1,10 @@
 """The sky stage on one photo (Dobashi 2012 §4.1): classify cloud / sky / neither, interpolate the sky
 behind the clouds (∇²L_sky = 0), estimate the sunlight colour c_in, and the soft cloud alpha.
 
+The result is checked for plausibility (:mod:`natscene.sky.plausibility`): a photo that does not look like a
+daytime cloud photo stops the job with what was found and what to do, unless the photo's config accepts it
+(``accept_unusual``), in which case the findings become warnings.
+
 The Laplace solve treats every non-sky pixel (cloud and neither) as unknown, grown by ``solve_margin``
 pixels (a dilation with a 3x3 cross, repeated) so that the bright, semi-transparent cloud fringe that the
 classifier left in the sky class does not leak into L_sky; L_sky equals the photo on all other pixels.
@@ -14,6 +18,7 @@ import numpy as np
 
 from natscene.io import InputError
 from natscene.sky.laplace import solve_laplace
+from natscene.sky.plausibility import PlausibilityLimits, findings, measure, negative_values
 from natscene.sky.segmentation import AUTO, CLOUD, NEITHER, SKY, check_colour_photo, classify, soft_alpha
 from natscene.sky.sun_colour import SunColour, sun_colour
 
@@ -30,6 +35,8 @@ class SkySettings:
     clip_level: float = 0.99
     grey_chroma: float = 3.0
     overcast_cloud_fraction: float = 0.8
+    checks: dict = field(default_factory=dict)  # PlausibilityLimits overrides (sky.checks)
+    accept_unusual: bool = False  # photos.<name>.accept_unusual: implausible findings warn instead of stopping
 
     @classmethod
     def from_config(cls, *sections: dict) -> "SkySettings":
@@ -52,6 +59,7 @@ class SkyResult:
     classify_info: dict
     settings: SkySettings
     warnings: list = field(default_factory=list)
+    plausibility: dict = field(default_factory=dict)
 
     def summary(self) -> dict:
         """The sun.yaml content."""
@@ -73,6 +81,7 @@ class SkyResult:
                        **self.sun.counts},
             "hand_mask_pixels": self.classify_info["hand_mask_pixels"],
             "overcast": self.sun.overcast,
+            "plausibility": dict(self.plausibility),
             "warnings": list(self.warnings),
             "settings": asdict(self.settings),
         }
@@ -90,9 +99,25 @@ def solve_region(labels: np.ndarray, margin: int) -> np.ndarray:
 
 
 def extract_sky(photo: np.ndarray, settings: SkySettings | None = None,
-                hand_mask: np.ndarray | None = None, name: str = "photo") -> SkyResult:
-    """Run §4.1 on a linear RGB photo (H, W, 3); ``hand_mask`` from :func:`decode_hand_mask` or None."""
+                hand_mask: np.ndarray | None = None, name: str = "photo", key: str = "photos.<name>") -> SkyResult:
+    """Run §4.1 on a linear RGB photo (H, W, 3); ``hand_mask`` from :func:`decode_hand_mask` or None.
+
+    ``name`` names the photo in messages (its file), ``key`` its config entry (``photos.kite``).
+    InputError when the photo is implausible (:mod:`natscene.sky.plausibility`) and
+    ``settings.accept_unusual`` is False.
+    """
     st = settings or SkySettings()
+    warnings = []
+    neg = negative_values(photo)
+    if neg is not None:
+        what = (f"{neg['pixels']} pixels ({100 * neg['fraction']:.2f}%) have negative linear values (min "
+                f"{neg['min']:.4g})")
+        if not st.accept_unusual:
+            raise InputError(f"{name}: {what}. Light is never negative: the EXR was made by a colour transform or "
+                             f"filter that undershoots. Clamp it at 0 where it was made, or set "
+                             f"{key}.accept_unusual: true to clamp them to 0 here")
+        warnings.append(f"{what}; clamped to 0 ({key}.accept_unusual)")
+        photo = np.maximum(np.asarray(photo, np.float32), 0.0)
     if hand_mask is not None and not (np.asarray(hand_mask) == AUTO).any():
         photo = np.asarray(photo, np.float32)  # fully painted: no chroma needed, a grey photo is fine
         photo = np.repeat(photo, 3, -1) if photo.shape[-1] == 1 else photo
@@ -111,11 +136,23 @@ def extract_sky(photo: np.ndarray, settings: SkySettings | None = None,
         raise InputError(f"{name}: no cloud pixels found (threshold {info['threshold']:.4g}, "
                          f"{info['threshold_source']}): set photos.<name>.threshold higher or paint cloud (white) "
                          f"in a mask")
+    sun = sun_colour(photo, labels, st.clip_level, st.grey_chroma, st.overcast_cloud_fraction)
+    hand_labelled = hand_mask is not None and not (np.asarray(hand_mask) == AUTO).any()
+    measured = measure(photo, labels, sun.c_in)
+    found = findings(measured, PlausibilityLimits.from_config(st.checks), hand_labelled)
+    if found and not st.accept_unusual:
+        raise InputError(
+            f"{name}: this does not look like a daytime cloud photo the sky stage can use:\n  - "
+            + "\n  - ".join(found)
+            + f"\nWhat to do: if the classification is wrong, paint a mask ({key}.mask: white = cloud, black = sky, "
+              f"red = neither); otherwise use another photo (blue sky with white or grey clouds); or set "
+              f"{key}.accept_unusual: true to fit it anyway (the findings then become warnings in sun.yaml and "
+              f"the fit's params.yaml). Limits: sky.checks")
+    warnings += [f"unusual photo ({key}.accept_unusual): {f}" for f in found]
     solved = solve_region(labels, st.solve_margin)
     sky = solve_laplace(photo, solved)
-    sun = sun_colour(photo, labels, st.clip_level, st.grey_chroma, st.overcast_cloud_fraction)
     alpha = soft_alpha(photo, sky, labels, sun.c_in)
-    return SkyResult(photo, labels, alpha, sky, solved, sun, info, st, list(sun.warnings))
+    return SkyResult(photo, labels, alpha, sky, solved, sun, info, st, warnings + list(sun.warnings), measured)
 
 
 def preview_panels(res: SkyResult) -> np.ndarray:

@@ -1,0 +1,323 @@
+"""Checks of a schema-valid config that a JSON schema cannot express, run before any job starts.
+
+The schema checks each value on its own (types, ranges, allowed keys). This module checks the config as a
+whole, so that no job starts on a config that would fail later with a raw exception naming no key:
+
+- **cross-references**: every name one section gives for an entry of another (keyframes -> photos, volumes,
+  views; precompute.pairs; shots -> volumes, keyframes; mie.demo.volume; composite image/sun products ->
+  shots, tiles, patterns, recolour, leaves, sky photos, fits, volumes) exists, and a product path is one that
+  a stage writes;
+- **input files**: every file the config names (photos, masks, textures, petal shapes, user volumes) exists;
+- **geometry**: no degenerate camera (position at its look-at, up parallel to the view direction) in views,
+  shot keyframes and composites; the sun above the horizon where a stage needs sunlight from above (views,
+  i.e. precompute and fit; shot keyframes, whose Preetham sky is defined for a sun above the horizon; the
+  composite's sun; the Mie demo);
+- **value relations**: grids strictly increasing, the precompute's sigma_t within the fit's meaning [0, 1],
+  keyframe frames inside their shot, a composite frame inside the shot it reads.
+
+Every problem is reported with the key's path (``keyframes.kite.photo``), and all problems at once.
+"""
+from __future__ import annotations
+
+import os
+import re
+from pathlib import Path
+
+import numpy as np
+
+from natscene.config import ConfigError, resolve_path
+
+
+class _Problems:
+    def __init__(self):
+        self.items: list[str] = []
+
+    def add(self, key: str, msg: str) -> None:
+        self.items.append(f"config key '{key}': {msg}")
+
+
+def _names(section) -> str:
+    return ", ".join(sorted(section)) if section else "(none)"
+
+
+def _ref(p: _Problems, config: dict, key: str, value, section: str) -> bool:
+    entries = config.get(section) or {}
+    if value not in entries:
+        p.add(key, f"{value!r} is not in '{section}' (defined: {_names(entries)})")
+        return False
+    return True
+
+
+def _file(p: _Problems, root, key: str, path, what: str) -> None:
+    if not isinstance(path, str) or not path:
+        p.add(key, f"{what} path missing")
+        return
+    full = Path(resolve_path(path, root))
+    if not full.is_file():
+        p.add(key, f"{what} {full} not found (paths are relative to the repository root {root})")
+    elif not os.access(full, os.R_OK):
+        p.add(key, f"{what} {full} is not readable; fix its permissions")
+
+
+# --------------------------------------------------------------------------------------------- geometry
+def camera_problem(cam: dict) -> str | None:
+    """Why a camera {position, look_at, up, fov} is degenerate, or None."""
+    pos = np.asarray(cam.get("position", (0, 0, 0)), np.float64)
+    at = np.asarray(cam.get("look_at", (0, 0, 1)), np.float64)
+    up = np.asarray(cam.get("up", (0, 1, 0)), np.float64)
+    fwd = at - pos
+    dist = float(np.linalg.norm(fwd))
+    scale = max(float(np.linalg.norm(pos)), float(np.linalg.norm(at)), 1.0)
+    if dist <= 1e-9 * scale:
+        return f"position {pos.tolist()} equals look_at {at.tolist()}: the view direction is undefined; move one"
+    if float(np.linalg.norm(up)) == 0.0:
+        return "up is the zero vector; use e.g. [0, 1, 0]"
+    s = float(np.linalg.norm(np.cross(fwd / dist, up / np.linalg.norm(up))))
+    if s < 1e-6:
+        return (f"up {up.tolist()} is parallel to the view direction {np.round(fwd / dist, 6).tolist()}: the image's "
+                f"right and up are undefined; choose an up that is not along the view direction")
+    return None
+
+
+def _camera(p: _Problems, key: str, cam: dict | None) -> None:
+    if cam is None:
+        return
+    why = camera_problem(cam)
+    if why:
+        p.add(key, why)
+
+
+def _sun_above(p: _Problems, key: str, sun: dict | None, needed_by: str) -> None:
+    if sun is None or "elevation" not in sun:
+        return
+    el = float(sun["elevation"])
+    if el <= 0.0:
+        p.add(f"{key}.elevation", f"{el:g} deg puts the sun at or below the horizon, but {needed_by} needs "
+                                  f"sunlight from above it; use an elevation > 0")
+
+
+# ------------------------------------------------------------------------------------------- products
+_FRAME_FIELD = re.compile(r"\{frame(:[^}]*)?\}")
+
+
+def _product_problem(config: dict, product: str, frames: list[int]) -> str | None:
+    """Why ``product`` (a path under the results directory, may contain {frame}) is not made by any stage."""
+    parts = product.strip("/").split("/")
+    head = parts[0]
+    sec = lambda name: config.get(name) or {}  # noqa: E731
+
+    def need(section, name, what):
+        if name not in sec(section):
+            return f"names {what} {name!r}, which is not in '{section}' (defined: {_names(sec(section))})"
+        return None
+
+    if len(parts) < 2:
+        return "is not a product of any stage (expected e.g. shots/<shot>/frames/{frame:04d}.exr)"
+    name = parts[1]
+    if head == "shots":
+        why = need("shots", name, "shot")
+        if why:
+            return why
+        n = sec("shots")[name].get("frames", 24)
+        if _FRAME_FIELD.search(product):
+            bad = [f for f in frames if f >= n]
+            if bad:
+                return f"frames {bad} are past the last frame ({n - 1}) of shot {name!r}"
+        return None
+    if head == "tiles":
+        return need("tiles", name, "texture")
+    if head == "patterns":
+        if name == "recolour":
+            return need("recolour", parts[2], "recoloured photo") if len(parts) > 2 else "names no recoloured photo"
+        return need("patterns", name, "pattern")
+    if head == "leaves":
+        leaves = sec("leaves")
+        if name != leaves.get("name", "maple"):
+            return f"names leaf {name!r}, but leaves.name is {leaves.get('name', 'maple')!r}"
+        if len(parts) >= 4:
+            climate, date = parts[2], Path(parts[3]).stem
+            if climate not in (leaves.get("cases") or {}):
+                return f"names climate case {climate!r}, which is not in 'leaves.cases' " \
+                       f"(defined: {_names(leaves.get('cases') or {})})"
+            if parts[3].endswith(".exr") and date not in (leaves.get("dates") or []):
+                return f"names date {date!r}, which is not in 'leaves.dates' ({', '.join(leaves.get('dates') or [])})"
+        return None
+    if head == "sky":
+        return need("photos", name, "photo")
+    if head == "fit":
+        return need("keyframes", name, "keyframe")
+    if head == "volumes":
+        return need("volumes", name, "volume")
+    if head == "precompute":
+        return need("volumes", name, "volume") or (need("views", parts[2], "view") if len(parts) > 2 else None)
+    if head in ("mie", "composite"):
+        return None
+    return (f"is not a product of any stage (the first folder must be one of shots, tiles, patterns, leaves, "
+            f"sky, fit, volumes, precompute, mie)")
+
+
+def _image_source(p: _Problems, config: dict, root, key: str, src: dict | None, frames: list[int]) -> None:
+    if not isinstance(src, dict):
+        return
+    if "product" in src:
+        why = _product_problem(config, str(src["product"]), frames)
+        if why:
+            p.add(f"{key}.product", f"{src['product']!r} {why}")
+    elif "path" in src:
+        for f in frames if _FRAME_FIELD.search(src["path"]) else [None]:
+            path = src["path"] if f is None else src["path"].format(frame=f)
+            _file(p, root, f"{key}.path", path, "image")
+
+
+# ------------------------------------------------------------------------------------------- sections
+def _check_volumes(p, config, root):
+    for name, v in (config.get("volumes") or {}).items():
+        if v.get("kind") == "file":
+            if not v.get("path"):
+                p.add(f"volumes.{name}.path", "needed with kind: file (a .npy or Mitsuba .vol grid)")
+            else:
+                _file(p, root, f"volumes.{name}.path", v["path"], "volume file")
+
+
+def _check_views(p, config):
+    for name, view in (config.get("views") or {}).items():
+        _camera(p, f"views.{name}.camera", view.get("camera"))
+        _sun_above(p, f"views.{name}.sun", view.get("sun"),
+                   "the precompute and fit of a view (sunlight on the cloud from above)")
+
+
+def _check_photos(p, config, root):
+    for name, ph in (config.get("photos") or {}).items():
+        _file(p, root, f"photos.{name}.path", ph.get("path"), "photo")
+        if ph.get("mask"):
+            _file(p, root, f"photos.{name}.mask", ph["mask"], "mask")
+
+
+def _increasing(p, key, values):
+    v = np.asarray(values, np.float64)
+    if v.size > 1 and not np.all(np.diff(v) > 0):
+        p.add(key, f"{list(values)} must be strictly increasing")
+
+
+def _check_precompute(p, config):
+    pre = config.get("precompute") or {}
+    for i, pair in enumerate(pre.get("pairs") or []):
+        _ref(p, config, f"precompute.pairs[{i}].volume", pair.get("volume"), "volumes")
+        _ref(p, config, f"precompute.pairs[{i}].view", pair.get("view"), "views")
+    if "sigma_t" in pre:
+        _increasing(p, "precompute.sigma_t", pre["sigma_t"])
+        big = [s for s in pre["sigma_t"] if s > 1]
+        if big:
+            p.add("precompute.sigma_t", f"values {big} are above 1: sigma_t is the fit's unitless extinction in "
+                                        f"[0, 1] (0 = clear, 1 = the volume's reference optical depth); for "
+                                        f"denser clouds raise volumes.<name>.extinction_scale or "
+                                        f"reference_optical_depth instead")
+    if "g" in pre:
+        _increasing(p, "precompute.g", pre["g"])
+
+
+def _check_keyframes(p, config):
+    for name, kf in (config.get("keyframes") or {}).items():
+        _ref(p, config, f"keyframes.{name}.photo", kf.get("photo"), "photos")
+        _ref(p, config, f"keyframes.{name}.volume", kf.get("volume"), "volumes")
+        _ref(p, config, f"keyframes.{name}.view", kf.get("view"), "views")
+
+
+def _check_shots(p, config):
+    for name, shot in (config.get("shots") or {}).items():
+        key = f"shots.{name}"
+        _ref(p, config, f"{key}.volume", shot.get("volume"), "volumes")
+        n = shot.get("frames", 24)
+        ats = [k.get("at") for k in shot.get("keyframes") or []]
+        if len(set(ats)) != len(ats):
+            p.add(f"{key}.keyframes", f"two keyframes share a frame index ({sorted(ats)})")
+        for i, kf in enumerate(shot.get("keyframes") or []):
+            kk = f"{key}.keyframes[{i}]"
+            if kf.get("at", 0) >= n:
+                p.add(f"{kk}.at", f"frame {kf['at']} is past the shot's last frame {n - 1}; lower it or raise "
+                                  f"'{key}.frames'")
+            fit = kf.get("fit")
+            view = None
+            if fit is not None and _ref(p, config, f"{kk}.fit", fit, "keyframes"):
+                view = (config.get("views") or {}).get(config["keyframes"][fit].get("view"))
+            for part in ("sun", "camera"):
+                if kf.get(part) is None and view is None and fit is None:
+                    p.add(f"{kk}.{part}", "needed when the keyframe has no 'fit' whose view would give it")
+            if fit is None:
+                from natscene.keyframes.shot import COLOURS, PARAMS
+                missing = [q for q in PARAMS + COLOURS if q not in (kf.get("params") or {})]
+                if missing:
+                    p.add(f"{kk}.params", f"{missing} missing; give them or name a fitted keyframe with 'fit'")
+            _camera(p, f"{kk}.camera", kf.get("camera"))
+            _sun_above(p, f"{kk}.sun", kf.get("sun"), "the shot's frames (the Preetham sky is defined for a sun "
+                                                      "above the horizon)")
+
+
+def _check_tiles(p, config, root):
+    for name, t in (config.get("tiles") or {}).items():
+        _file(p, root, f"tiles.{name}.path", t.get("path"), "example texture")
+        for i, e in enumerate(t.get("embed") or []):
+            _file(p, root, f"tiles.{name}.embed[{i}].path", e.get("path"), "embedded object image")
+
+
+def _check_patterns(p, config, root):
+    for name, pat in (config.get("patterns") or {}).items():
+        shape = pat.get("shape") or {}
+        if shape.get("kind") == "file":
+            _file(p, root, f"patterns.{name}.shape.path", shape.get("path"), "petal shape mask")
+    for name, r in (config.get("recolour") or {}).items():
+        _file(p, root, f"recolour.{name}.photo", r.get("photo"), "flower photo")
+
+
+def _check_mie(p, config):
+    demo = (config.get("mie") or {}).get("demo") or {}
+    if demo.get("volume") is not None:
+        _ref(p, config, "mie.demo.volume", demo["volume"], "volumes")
+        _sun_above(p, "mie.demo.sun", demo.get("sun"), "the Mie demo (glory, fogbow, silver lining)")
+
+
+def _check_composite(p, config, root):
+    for name, c in (config.get("composite") or {}).items():
+        key = f"composite.{name}"
+        frames = list(c.get("frames") or [0])
+        _camera(p, f"{key}.camera", c.get("camera"))
+        _image_source(p, config, root, f"{key}.background", c.get("background"), frames)
+        _image_source(p, config, root, f"{key}.ground.texture", (c.get("ground") or {}).get("texture"), frames)
+        for i, leaf in enumerate(c.get("leaves") or []):
+            _image_source(p, config, root, f"{key}.leaves[{i}].texture", leaf.get("texture"), frames)
+        sun = c.get("sun") or {}
+        if sun.get("shot_state"):
+            why = _product_problem(config, sun["shot_state"], frames)
+            if why:
+                p.add(f"{key}.sun.shot_state", f"{sun['shot_state']!r} {why}")
+        else:
+            _sun_above(p, f"{key}.sun", sun, "the composite (the sun lights the ground, petals and leaves)")
+        if sun.get("sky_product"):
+            why = _product_problem(config, sun["sky_product"], frames)
+            if why:
+                p.add(f"{key}.sun.sky_product", f"{sun['sky_product']!r} {why}")
+
+
+def config_problems(config: dict, root: str | os.PathLike) -> list[str]:
+    """Every cross-reference, input-file, geometry and value-relation problem of a schema-valid config."""
+    p = _Problems()
+    _check_volumes(p, config, root)
+    _check_views(p, config)
+    _check_photos(p, config, root)
+    _check_precompute(p, config)
+    _check_keyframes(p, config)
+    _check_shots(p, config)
+    _check_tiles(p, config, root)
+    _check_patterns(p, config, root)
+    _check_mie(p, config)
+    _check_composite(p, config, root)
+    return p.items
+
+
+def check_config(config: dict, root: str | os.PathLike, source: str = "config") -> dict:
+    """Raise :class:`ConfigError` listing every problem (each with its key path); return the config."""
+    problems = config_problems(config, root)
+    if problems:
+        head = f"{source}: {len(problems)} problem{'s' if len(problems) > 1 else ''} in the configuration"
+        raise ConfigError(head + ":\n  " + "\n  ".join(problems))
+    return config
