@@ -7,15 +7,20 @@ from pathlib import Path
 ROOT = Path(workflow.basedir).resolve()
 sys.path.insert(0, str(ROOT / "src"))  # the library, also when the package is not pip-installed
 
-from natscene.config import load_yaml_config, resolve_path, validate_config
+from natscene.config import ConfigError, load_yaml_config, resolve_path, validate_config
 from natscene.config_checks import check_config
 from natscene.fingerprint import script_fingerprint as _script_fingerprint
+from natscene.resources import mem_mb as _mem_mb
+from natscene.resources import memory_problems as _memory_problems
 
 if not config:  # no --configfile given: the main job on the bundled example
     config.update(load_yaml_config(ROOT / "config" / "config.yaml"))
 _CONFIG_SOURCE = ", ".join(map(str, workflow.configfiles)) or "config/config.yaml"
 validate_config(config, ROOT / "workflow" / "schemas" / "config.schema.yaml", source=_CONFIG_SOURCE)
 check_config(config, ROOT, source=_CONFIG_SOURCE)  # cross-references, input files, geometry: before any job
+_too_big = _memory_problems(config, ROOT, workflow.global_resources)  # jobs that cannot fit in memory
+if _too_big:
+    raise ConfigError(f"{_CONFIG_SOURCE}: {len(_too_big)} job(s) cannot fit in memory:\n  " + "\n  ".join(_too_big))
 
 RESULTS = config["results"]
 ALL_TARGETS = []  # each rule file appends the final products it wants built by `rule all`
@@ -28,6 +33,11 @@ def src(path):
 
 def script_path(name):
     return str(ROOT / "scripts" / name)
+
+
+def estimated_mem_mb(rule):
+    """`resources: mem_mb=` of a rule: estimated from the job's inputs (natscene.resources), refused if too big."""
+    return lambda wc: _mem_mb(rule, config, dict(wc.items()), ROOT, workflow.global_resources)
 
 
 def script_fingerprint(name):

@@ -5,7 +5,7 @@ from natscene.io import InputError, read_photo, write_exr, write_png, write_yaml
 from natscene.runner import run
 from natscene.tiles.construct import construct, diagram, to_atlas
 from natscene.tiles.embed import embed, grabcut_object
-from natscene.tiles.genetic import GAParams
+from natscene.tiles.genetic import GAParams, max_tile_size, min_example_side, min_patch_positions
 from natscene.tiles.omega import tile_set
 
 
@@ -15,10 +15,19 @@ def main(snakemake, log):
     example = read_photo(snakemake.input.example)
     s = int(spec["tile_size"])
     H, W = example.shape[:2]
-    if s > min(H, W):
-        raise InputError(f"config key 'tiles.{name}.tile_size': {s} exceeds the example "
-                         f"{snakemake.input.example} ({W}x{H}); choose at most {min(H, W) // 2 * 2}")
     ts = tile_set(spec["set"])
+    best = max_tile_size(H, W, ts.n)  # advice that runs: the largest size the GA has enough patches for
+    if best is None:
+        side = min_example_side(ts.n)
+        raise InputError(f"config key 'tiles.{name}.path': the example {snakemake.input.example} ({W}x{H}) is too "
+                         f"small for set {ts.name} ({ts.n} sample patches): even the smallest tile size, 4, leaves "
+                         f"{max(H - 3, 0) * max(W - 3, 0)} patch positions and the GA needs "
+                         f"{min_patch_positions(ts.n)}. Use an example of at least {side}x{side} px")
+    if s > best:
+        raise InputError(f"config key 'tiles.{name}.tile_size': {s} is too large for the example "
+                         f"{snakemake.input.example} ({W}x{H}) with set {ts.name}: it leaves "
+                         f"{max(H - s + 1, 0) * max(W - s + 1, 0)} patch positions, the GA needs "
+                         f"{min_patch_positions(ts.n)}; choose at most {best}")
     params = GAParams.from_dict(spec["ga"])
     log.info(f"{name}: example {W}x{H}, set {ts.name} ({ts.m} tiles, {ts.n} patches), tile {s}px")
     seams = spec["seams"]

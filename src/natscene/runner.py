@@ -41,6 +41,27 @@ def setup_logging(log_path: str | None, name: str = "natscene") -> logging.Logge
     return logger
 
 
+def peak_rss_mb() -> float:
+    """Peak resident memory (MB) of this process and of its finished children (getrusage, exact)."""
+    import resource
+
+    kb = max(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss, resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss)
+    return kb / 1024.0  # Linux reports kilobytes
+
+
+def _log_peak_memory(snakemake, logger) -> None:
+    """One line 'peak memory X MB of mem_mb Y' in the rule's log (the data behind natscene.resources)."""
+    declared = getattr(getattr(snakemake, "resources", None), "mem_mb", None)
+    peak = peak_rss_mb()
+    wc = getattr(snakemake, "wildcards", None)
+    wildcards = ", ".join(f"{k}={v}" for k, v in (wc.items() if hasattr(wc, "items") else []))
+    logger.info(f"peak memory {peak:.0f} MB" + (f" of mem_mb {declared}" if declared else "")
+                + f" (rule {snakemake.rule}{', ' + wildcards if wildcards else ''})")
+    if declared and peak > float(declared):
+        logger.warning(f"rule {snakemake.rule} used {peak:.0f} MB, more than its declared mem_mb {declared}: the "
+                       f"estimate of natscene.resources is low for this input; please report it")
+
+
 def run(snakemake, main) -> None:
     """Call ``main(snakemake, logger)``; report bad input in one line and exit non-zero."""
     log_path = snakemake.log[0] if len(snakemake.log) else None
@@ -50,6 +71,7 @@ def run(snakemake, main) -> None:
             logger.info(f"removed {f}, left by an earlier interrupted run of this job")
     try:
         main(snakemake, logger)
+        _log_peak_memory(snakemake, logger)
     except (InputError, ConfigError) as e:
         logger.error(f"rule {snakemake.rule}: {e}")
         sys.exit(1)

@@ -38,7 +38,7 @@ rule composite:
         f"{RESULTS}/logs/composite/{{name}}.{{frame}}.log",
     threads: 2
     resources:
-        mem_mb=3000,
+        mem_mb=estimated_mem_mb("composite"),
     script:
         script_path("composite.py")
 
@@ -63,7 +63,7 @@ rule composite_reference:
         f"{RESULTS}/logs/composite_reference/{{name}}.{{frame}}.log",
     threads: 2
     resources:
-        mem_mb=4000,
+        mem_mb=estimated_mem_mb("composite_reference"),
     script:
         script_path("composite_reference.py")
 

@@ -52,7 +52,7 @@ rule fit:
         f"{RESULTS}/logs/fit/{{keyframe}}.log",
     threads: 1
     resources:
-        mem_mb=3000,
+        mem_mb=estimated_mem_mb("fit"),
     script:
         script_path("fit.py")
 

@@ -16,7 +16,7 @@ rule leaf_season:
         f"{RESULTS}/logs/leaf_season/{{climate}}.log",
     threads: 1
     resources:
-        mem_mb=1500,
+        mem_mb=estimated_mem_mb("leaf_season"),
     script:
         script_path("leaf_season.py")
 

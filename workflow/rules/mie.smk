@@ -33,7 +33,7 @@ rule mie_table:
         f"{RESULTS}/logs/mie/table.log",
     threads: 1
     resources:
-        mem_mb=1000,
+        mem_mb=estimated_mem_mb("mie_table"),
     script:
         script_path("mie_table.py")
 
@@ -66,7 +66,7 @@ rule mie_table_droplets:
         f"{RESULTS}/logs/mie/table_{{droplets}}.log",
     threads: 1
     resources:
-        mem_mb=1000,
+        mem_mb=estimated_mem_mb("mie_table_droplets"),
     script:
         script_path("mie_table.py")
 
@@ -83,7 +83,7 @@ rule mie_deck:
         f"{RESULTS}/logs/mie/deck.log",
     threads: 1
     resources:
-        mem_mb=1000,
+        mem_mb=estimated_mem_mb("mie_deck"),
     script:
         script_path("mie_deck.py")
 
@@ -105,7 +105,7 @@ rule point_scatter:
         f"{RESULTS}/logs/mie/point_scatter/{{volume}}_{{sun}}_{{phase}}.log",
     threads: 2
     resources:
-        mem_mb=6000,
+        mem_mb=estimated_mem_mb("point_scatter"),
     script:
         script_path("point_scatter.py")
 
@@ -137,7 +137,7 @@ rule mie_render:
         f"{RESULTS}/logs/mie/render/{{volume}}_{{shot}}.log",
     threads: 2
     resources:
-        mem_mb=3000,
+        mem_mb=estimated_mem_mb("mie_render"),
     script:
         script_path("mie_render.py")
 

@@ -13,7 +13,7 @@ rule pigment_maps:
         f"{RESULTS}/logs/pigment_maps/{{pattern}}.log",
     threads: 2
     resources:
-        mem_mb=3000,
+        mem_mb=estimated_mem_mb("pigment_maps"),
     script:
         script_path("pigment_maps.py")
 
@@ -31,7 +31,7 @@ rule pattern_color:
         f"{RESULTS}/logs/pattern_color/{{pattern}}.log",
     threads: 1
     resources:
-        mem_mb=1500,
+        mem_mb=estimated_mem_mb("pattern_color"),
     script:
         script_path("pattern_color.py")
 
@@ -50,7 +50,7 @@ rule recolour:
         f"{RESULTS}/logs/recolour/{{photo}}.log",
     threads: 2
     resources:
-        mem_mb=2000,
+        mem_mb=estimated_mem_mb("recolour"),
     script:
         script_path("recolour.py")
 
@@ -67,6 +67,8 @@ rule pattern_sheet:
     log:
         f"{RESULTS}/logs/pattern_sheet.log",
     threads: 1
+    resources:
+        mem_mb=estimated_mem_mb("pattern_sheet"),
     script:
         script_path("pattern_sheet.py")
 

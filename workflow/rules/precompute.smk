@@ -22,7 +22,7 @@ rule precompute:
         f"{RESULTS}/logs/precompute/{{volume}}/{{view}}.log",
     threads: config["threads"]
     resources:
-        mem_mb=6000,
+        mem_mb=estimated_mem_mb("precompute"),
     cache: "omit-software"
     script:
         script_path("precompute.py")

@@ -71,7 +71,7 @@ rule interpolate:
         f"{RESULTS}/logs/shots/{{shot}}/interpolate.{{frame}}.log",
     threads: 1
     resources:
-        mem_mb=500,
+        mem_mb=estimated_mem_mb("interpolate"),
     script:
         script_path("interpolate.py")
 
@@ -97,7 +97,7 @@ rule render_frame:
         f"{RESULTS}/logs/shots/{{shot}}/render_frame.{{frame}}.log",
     threads: config["threads"]
     resources:
-        mem_mb=4000,
+        mem_mb=estimated_mem_mb("render_frame"),
         runtime=30,
     script:
         script_path("render_frame.py")
@@ -119,7 +119,7 @@ rule animation:
         f"{RESULTS}/logs/shots/{{shot}}/animation.log",
     threads: 1
     resources:
-        mem_mb=2000,
+        mem_mb=estimated_mem_mb("animation"),
     script:
         script_path("animation.py")
 

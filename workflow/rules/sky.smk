@@ -36,7 +36,7 @@ rule sky:
         f"{RESULTS}/logs/sky/{{photo}}.log",
     threads: 1
     resources:
-        mem_mb=1500,
+        mem_mb=estimated_mem_mb("sky"),
     script:
         script_path("sky.py")
 
@@ -59,7 +59,7 @@ rule sky_resample:
         f"{RESULTS}/logs/sky/{{photo}}_{{W}}x{{H}}.log",
     threads: 1
     resources:
-        mem_mb=1000,
+        mem_mb=estimated_mem_mb("sky_resample"),
     script:
         script_path("sky_resample.py")
 

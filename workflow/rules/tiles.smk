@@ -15,7 +15,7 @@ rule tileset:
         f"{RESULTS}/logs/tileset/{{texture}}.log",
     threads: 1
     resources:
-        mem_mb=2000,
+        mem_mb=estimated_mem_mb("tileset"),
     script:
         script_path("tileset.py")
 
@@ -37,7 +37,7 @@ rule tile_texture:
         f"{RESULTS}/logs/tile_texture/{{texture}}_{{w}}x{{h}}.log",
     threads: 1
     resources:
-        mem_mb=4000,
+        mem_mb=estimated_mem_mb("tile_texture"),
     script:
         script_path("tile_texture.py")
 

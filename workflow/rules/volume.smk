@@ -16,7 +16,7 @@ rule volume:
         f"{RESULTS}/logs/volume/{{volume}}.log",
     threads: 2
     resources:
-        mem_mb=4000,
+        mem_mb=estimated_mem_mb("volume"),
     script:
         script_path("volume.py")
 

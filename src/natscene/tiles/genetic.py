@@ -178,6 +178,30 @@ class GAResult:
     evaluations: int = 0
 
 
+def min_patch_positions(n: int) -> int:
+    """Distinct patch positions the GA of :func:`run_ga` needs for a set of ``n`` sample patches: a mutation
+    replaces up to all ``n`` genes by new ones distinct from the ``n`` it had, so ``2 n``."""
+    return 2 * int(n)
+
+
+def max_tile_size(height: int, width: int, n: int) -> int | None:
+    """The largest valid tile size (even, >= 4, at most the example's smaller side) with which an example of
+    ``width`` x ``height`` px offers the GA enough patch positions ((H - s + 1)(W - s + 1) >= 2 n) for a set
+    of ``n`` sample patches; None when no tile size does."""
+    s = min(int(height), int(width)) // 2 * 2
+    while s >= 4:
+        if (height - s + 1) * (width - s + 1) >= min_patch_positions(n):
+            return s
+        s -= 2
+    return None
+
+
+def min_example_side(n: int, tile_size: int = 4) -> int:
+    """The smallest side of a square example that has enough patch positions at ``tile_size``."""
+    k = int(np.ceil(np.sqrt(min_patch_positions(n))))
+    return int(tile_size) - 1 + k
+
+
 def random_genes(rng, n: int, PH: int, PW: int, exclude=()) -> np.ndarray:
     """n distinct random patch coordinates not in ``exclude``."""
     if n + len(exclude) > PH * PW:
@@ -201,6 +225,10 @@ def run_ga(example: np.ndarray, ts: TileSet, tile_size: int, params: GAParams | 
     rng = np.random.default_rng(seed)
     cost = cost or MatchCost(example, tile_size, p.metric, p.mu)
     n, PH, PW = ts.n, cost.PH, cost.PW
+    if PH * PW < min_patch_positions(n):
+        raise ValueError(f"example too small for tile size {cost.s}: set {ts.name} needs {min_patch_positions(n)} "
+                         f"distinct patch positions, the example has {PH * PW}; largest tile size that works: "
+                         f"{max_tile_size(cost.H, cost.W, n)}")
     memo: dict[bytes, float] = {}
     counter = [0]
 

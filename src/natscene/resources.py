@@ -1,0 +1,341 @@
+"""Honest memory: each rule's ``mem_mb`` computed from its inputs, and jobs that cannot fit refused up front.
+
+A job's peak resident memory is modelled as ``base + sum_f coef_f * feature_f`` with the features of
+:func:`job_features` (voxels of the volume it reads or makes, pixels of its image, Monte Carlo samples,
+table entries, ...). The coefficients in :data:`MODEL` are least-squares fits to peak RSS measured with
+``getrusage`` (every job logs its peak, see :mod:`natscene.runner`) over several sizes per rule, by
+``benchmarks/memory.py``, which writes ``results/benchmarks/memory.json`` and prints the coefficients
+to paste here after a change to a stage's memory use.
+
+The declared ``mem_mb`` is the model times :data:`MARGIN` plus :data:`SLACK_MB` (so Snakemake and a cluster
+scheduler reserve what the job needs), rounded up to 100 MB. Before any job starts (:func:`memory_problems`,
+called from the Snakefile) every configured product's jobs are estimated, and a job whose estimate exceeds
+the memory available to one job (:func:`available_memory_mb`: ``--resources mem_mb=...`` if given, else
+``$NATSCENE_MEMORY_MB``, else the machine's memory or its cgroup limit) is refused with the estimate and the
+config key that sets its size.
+"""
+from __future__ import annotations
+
+import math
+import os
+import struct
+from pathlib import Path
+
+import numpy as np
+
+from natscene.config import ConfigError, resolve_path
+
+MB = 1024.0 * 1024.0
+MARGIN = 1.2  # declared = MARGIN * model + SLACK_MB
+SLACK_MB = 200.0
+
+#: rule -> {"base": MB, feature: MB per unit}. Fitted by benchmarks/memory.py (see the module docstring).
+MODEL: dict[str, dict[str, float]] = {
+    "volume": {"base": 250.0, "voxels": 40.0 / MB},
+    "volume_file": {"base": 250.0, "voxels": 40.0 / MB},
+    "precompute": {"base": 900.0, "voxels": 12.0 / MB, "pixels": 0.0, "table_values": 12.0 / MB},
+    "fit": {"base": 400.0, "table_values": 12.0 / MB, "pixels": 0.0},
+    "sky": {"base": 300.0, "pixels": 400.0 / MB},
+    "sky_resample": {"base": 250.0, "pixels": 100.0 / MB},
+    "render_frame": {"base": 900.0, "voxels": 12.0 / MB, "pixels": 2000.0 / MB},
+    "point_scatter": {"base": 400.0, "voxels": 200.0 / MB},
+    "mie_render": {"base": 600.0, "voxels": 60.0 / MB, "pixels": 2000.0 / MB},
+    "mie_deck": {"base": 300.0, "voxels": 40.0 / MB},
+    "mie_table": {"base": 300.0},
+    "mie_table_droplets": {"base": 300.0},
+    "composite": {"base": 900.0, "samples": 600.0 / MB, "texture_pixels": 40.0 / MB},
+    "composite_reference": {"base": 900.0, "spectral_samples": 40.0 / MB, "texture_pixels": 40.0 / MB},
+    "tileset": {"base": 300.0, "pixels": 8000.0 / MB},
+    "tile_texture": {"base": 300.0, "pixels": 60.0 / MB},
+    "pigment_maps": {"base": 300.0, "pixels": 3000.0 / MB},
+    "pattern_color": {"base": 300.0, "pixels": 1000.0 / MB},
+    "pattern_sheet": {"base": 250.0, "pixels": 200.0 / MB},
+    "recolour": {"base": 300.0, "pixels": 1500.0 / MB},
+    "leaf_season": {"base": 300.0, "pixels": 400.0 / MB},
+    "interpolate": {"base": 200.0},
+    "animation": {"base": 250.0, "pixels": 20.0 / MB},
+}
+
+
+# -------------------------------------------------------------------------------------------- sizes
+def image_size(path: str | os.PathLike) -> tuple[int, int] | None:
+    """(width, height) of an image from its header (no decoding); None when it cannot be read."""
+    import OpenImageIO as oiio
+
+    inp = oiio.ImageInput.open(str(path))
+    if inp is None:
+        return None
+    try:
+        spec = inp.spec()
+        return int(spec.width), int(spec.height)
+    finally:
+        inp.close()
+
+
+def grid_file_voxels(path: str | os.PathLike) -> int | None:
+    """Voxels of a user grid from its header: ``.npy`` (numpy header) or Mitsuba ``.vol``; None if unknown."""
+    path = Path(path)
+    try:
+        with open(path, "rb") as f:
+            if path.suffix.lower() == ".npy":
+                version = np.lib.format.read_magic(f)
+                read = np.lib.format.read_array_header_1_0 if version == (1, 0) else \
+                    np.lib.format.read_array_header_2_0
+                shape = read(f)[0]  # the header only, no data
+                return int(np.prod(shape))
+            head = f.read(24)
+            if head[:3] == b"VOL" and len(head) == 24:
+                _, nx, ny, nz, nc = struct.unpack("<iiiii", head[4:24])
+                return int(nx) * int(ny) * int(nz) * int(nc)
+    except (OSError, ValueError):
+        return None
+    return None
+
+
+def volume_voxels(config: dict, name: str, root) -> tuple[int, str]:
+    """(voxels, the config key that sets them) of volume ``name`` (``mie_deck``: the Mie demo's deck)."""
+    if name == "mie_deck":
+        deck = (config.get("mie") or {}).get("deck") or {}
+        n = int(deck.get("resolution", 160))
+        vox = float(deck.get("size", 2.0)) / n
+        ny = max(4, int(math.ceil(float(deck.get("thickness", 0.06)) * (1 + 2.5 * float(deck.get("relief", 0.15)))
+                                  / vox)) + 3)
+        return n * n * ny, "mie.deck.resolution"
+    v = (config.get("volumes") or {}).get(name) or {}
+    if v.get("kind") == "file" and v.get("path"):
+        n = grid_file_voxels(resolve_path(v["path"], root))
+        if n is not None:
+            return n, f"volumes.{name}.path"
+    return int(np.prod(v.get("resolution", [128, 96, 128]))), f"volumes.{name}.resolution"
+
+
+def _pixels(res) -> int:
+    return int(res[0]) * int(res[1])
+
+
+def _table_values(config: dict, pixels: int) -> int:
+    pre = config.get("precompute") or {}
+    n_s = len(pre.get("sigma_t", [0] * 11))
+    n_g = len(pre.get("g", [0] * 10))
+    n_m = int(pre.get("n_m", 4))
+    return pixels * n_s * (4 + n_g * max(n_m - 1, 1))
+
+
+def _texture_pixels(config: dict, src: dict | None, root) -> int:
+    """Pixels of a composite image source (tiles products by their name, files by their header)."""
+    if not isinstance(src, dict):
+        return 0
+    if "product" in src:
+        import re
+        m = re.search(r"synth_(\d+)x(\d+)", src["product"])
+        if m:
+            return int(m.group(1)) * int(m.group(2))
+        return 0
+    if "path" in src:
+        size = image_size(resolve_path(src["path"], root))
+        return _pixels(size) if size else 0
+    return 0
+
+
+def job_features(rule: str, config: dict, wildcards: dict, root) -> tuple[str, dict, dict]:
+    """(model name, features, feature -> config key that sets it) of one job of ``rule``."""
+    wc = dict(wildcards)
+    feats: dict[str, float] = {}
+    keys: dict[str, str] = {}
+    model = rule
+    if rule == "volume":
+        v = (config.get("volumes") or {}).get(wc["volume"]) or {}
+        feats["voxels"], keys["voxels"] = volume_voxels(config, wc["volume"], root)
+        model = "volume_file" if v.get("kind") == "file" else "volume"
+    elif rule == "precompute":
+        view = config["views"][wc["view"]]
+        p = _pixels(view.get("resolution", [320, 240]))
+        feats["voxels"], keys["voxels"] = volume_voxels(config, wc["volume"], root)
+        feats["pixels"], keys["pixels"] = p, f"views.{wc['view']}.resolution"
+        feats["table_values"], keys["table_values"] = _table_values(config, p), f"views.{wc['view']}.resolution"
+    elif rule == "fit":
+        kf = config["keyframes"][wc["keyframe"]]
+        p = _pixels(config["views"][kf["view"]].get("resolution", [320, 240]))
+        feats["pixels"], keys["pixels"] = p, f"views.{kf['view']}.resolution"
+        feats["table_values"], keys["table_values"] = _table_values(config, p), f"views.{kf['view']}.resolution"
+    elif rule in ("sky", "sky_resample"):
+        ph = config["photos"][wc["photo"]]
+        size = image_size(resolve_path(ph["path"], root))
+        feats["pixels"], keys["pixels"] = (_pixels(size) if size else 0), f"photos.{wc['photo']}.path"
+    elif rule == "render_frame":
+        shot = config["shots"][wc["shot"]]
+        feats["voxels"], keys["voxels"] = volume_voxels(config, shot["volume"], root)
+        feats["pixels"], keys["pixels"] = _pixels(shot.get("resolution", [640, 480])), f"shots.{wc['shot']}.resolution"
+    elif rule in ("point_scatter", "mie_deck"):
+        name = wc.get("volume", "mie_deck")
+        feats["voxels"], keys["voxels"] = volume_voxels(config, name, root)
+    elif rule == "mie_render":
+        demo = (config.get("mie") or {}).get("demo") or {}
+        shot = (demo.get(wc.get("shot", "")) or {})
+        name = "mie_deck" if shot.get("cloud") == "deck" else wc["volume"]
+        feats["voxels"], keys["voxels"] = volume_voxels(config, name, root)
+        feats["pixels"], keys["pixels"] = _pixels(demo.get("resolution", [480, 360])), "mie.demo.resolution"
+    elif rule in ("composite", "composite_reference"):
+        c = config["composite"][wc["name"]]
+        p = _pixels(c.get("resolution", [320, 240]))
+        spp = int(c.get("spp", 4))
+        key = f"composite.{wc['name']}.resolution"
+        if rule == "composite":
+            feats["samples"], keys["samples"] = p * spp, key
+        else:
+            wl = c.get("wavelengths") or {}
+            n_wl = int(round((float(wl.get("stop", 780)) - float(wl.get("start", 380))) / float(wl.get("step", 5)))) + 1
+            feats["spectral_samples"], keys["spectral_samples"] = p * spp * n_wl, key
+        tex = [(c.get("ground") or {}).get("texture")] + [leaf.get("texture") for leaf in c.get("leaves") or []]
+        feats["texture_pixels"] = sum(_texture_pixels(config, t, root) for t in tex)
+        keys["texture_pixels"] = f"composite.{wc['name']}.ground.texture"
+    elif rule == "tileset":
+        t = config["tiles"][wc["texture"]]
+        size = image_size(resolve_path(t["path"], root))
+        feats["pixels"], keys["pixels"] = (_pixels(size) if size else 0), f"tiles.{wc['texture']}.path"
+    elif rule == "tile_texture":
+        feats["pixels"], keys["pixels"] = int(wc["w"]) * int(wc["h"]), f"tiles.{wc['texture']}.sizes"
+    elif rule in ("pigment_maps", "pattern_color"):
+        feats["pixels"], keys["pixels"] = _pixels(config["patterns"][wc["pattern"]].get("size", [549, 528])), \
+            f"patterns.{wc['pattern']}.size"
+    elif rule == "pattern_sheet":
+        feats["pixels"] = sum(_pixels(p.get("size", [549, 528])) for p in (config.get("patterns") or {}).values())
+        keys["pixels"] = "patterns.<name>.size"
+    elif rule == "recolour":
+        r = config["recolour"][wc["photo"]]
+        size = image_size(resolve_path(r["photo"], root))
+        feats["pixels"], keys["pixels"] = (_pixels(size) if size else 0), f"recolour.{wc['photo']}.photo"
+    elif rule == "leaf_season":
+        lv = config.get("leaves") or {}
+        feats["pixels"] = int(lv.get("size", 256)) ** 2 * len(lv.get("dates") or [1])
+        keys["pixels"] = "leaves.size"
+    elif rule == "animation":
+        shot = config["shots"][wc["shot"]]
+        feats["pixels"] = _pixels(shot.get("resolution", [640, 480])) * int(shot.get("frames", 24))
+        keys["pixels"] = f"shots.{wc['shot']}.resolution"
+    return model, feats, keys
+
+
+def model_mb(model: str, feats: dict) -> float:
+    """The modelled peak resident memory (MB) of a job."""
+    coef = MODEL.get(model, {"base": 500.0})
+    return coef.get("base", 0.0) + sum(coef.get(f, 0.0) * float(v) for f, v in feats.items())
+
+
+def estimate_mem_mb(rule: str, config: dict, wildcards: dict, root) -> tuple[int, str]:
+    """(declared mem_mb, the config key of the input that dominates the estimate) of one job.
+
+    The key is '' when the fixed part (libraries, renderer set-up) dominates: no config key makes it smaller.
+    """
+    model, feats, keys = job_features(rule, config, wildcards, root)
+    peak = model_mb(model, feats)
+    coef = MODEL.get(model, {})
+    parts = {f: coef.get(f, 0.0) * float(v) for f, v in feats.items()}
+    top = max(parts, key=parts.get) if parts else None
+    declared = int(math.ceil((MARGIN * peak + SLACK_MB) / 100.0) * 100)
+    if top is None or parts[top] < coef.get("base", 0.0):
+        return declared, ""
+    return declared, keys.get(top, "")
+
+
+# ------------------------------------------------------------------------------------------ machine
+def machine_memory_mb() -> int:
+    """Physical memory of this machine, or the cgroup (container) limit if lower, in MB."""
+    total = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    for cg in ("/sys/fs/cgroup/memory.max", "/sys/fs/cgroup/memory/memory.limit_in_bytes"):
+        try:
+            raw = Path(cg).read_text().strip()
+        except OSError:
+            continue
+        if raw.isdigit():
+            total = min(total, int(raw))
+    return int(total / MB)
+
+
+def available_memory_mb(global_resources: dict | None = None) -> tuple[int, str]:
+    """(MB one job may use, where that number comes from)."""
+    mem = (global_resources or {}).get("mem_mb")
+    mem = getattr(mem, "value", mem)  # Snakemake 9 wraps parsed resources
+    if isinstance(mem, (int, float)) and mem > 0 and mem < 1e12:
+        return int(mem), "snakemake --resources mem_mb"
+    env = os.environ.get("NATSCENE_MEMORY_MB")
+    if env:
+        try:
+            return int(float(env)), "$NATSCENE_MEMORY_MB"
+        except ValueError:
+            raise ConfigError(f"$NATSCENE_MEMORY_MB={env!r} is not a number of megabytes") from None
+    return machine_memory_mb(), "this machine's memory"
+
+
+def planned_jobs(config: dict) -> list[tuple[str, dict, str]]:
+    """(rule, wildcards, config entry) of the size-dependent jobs the configured products need."""
+    jobs = []
+    for v in config.get("volumes") or {}:
+        jobs.append(("volume", {"volume": v}, f"volumes.{v}"))
+    for p in (config.get("precompute") or {}).get("pairs") or []:
+        jobs.append(("precompute", {"volume": p["volume"], "view": p["view"]}, "precompute.pairs"))
+    for k, kf in (config.get("keyframes") or {}).items():
+        jobs.append(("precompute", {"volume": kf["volume"], "view": kf["view"]}, f"keyframes.{k}"))
+        jobs.append(("fit", {"keyframe": k}, f"keyframes.{k}"))
+    for p in config.get("photos") or {}:
+        jobs.append(("sky", {"photo": p}, f"photos.{p}"))
+    for s in config.get("shots") or {}:
+        jobs.append(("render_frame", {"shot": s}, f"shots.{s}"))
+        jobs.append(("animation", {"shot": s}, f"shots.{s}"))
+    demo = (config.get("mie") or {}).get("demo") or {}
+    if demo.get("volume"):
+        for vol in (demo["volume"], "mie_deck"):
+            jobs.append(("point_scatter", {"volume": vol}, "mie.demo.volume" if vol != "mie_deck" else "mie.deck"))
+        for shot in ("glory", "fogbow", "silver_lining"):
+            jobs.append(("mie_render", {"volume": demo["volume"], "shot": shot}, "mie.demo"))
+    for c, entry in (config.get("composite") or {}).items():
+        jobs.append(("composite", {"name": c}, f"composite.{c}"))
+        if entry.get("reference"):
+            jobs.append(("composite_reference", {"name": c}, f"composite.{c}"))
+    for t, spec in (config.get("tiles") or {}).items():
+        jobs.append(("tileset", {"texture": t}, f"tiles.{t}"))
+        for w, h in spec.get("sizes") or []:
+            jobs.append(("tile_texture", {"texture": t, "w": w, "h": h}, f"tiles.{t}.sizes"))
+    for p in config.get("patterns") or {}:
+        jobs.append(("pigment_maps", {"pattern": p}, f"patterns.{p}"))
+    for r in config.get("recolour") or {}:
+        jobs.append(("recolour", {"photo": r}, f"recolour.{r}"))
+    if config.get("leaves"):
+        jobs.append(("leaf_season", {}, "leaves"))
+    return jobs
+
+
+def refusal(rule: str, wildcards: dict, declared: int, key: str, available: int, source: str) -> str:
+    what = ", ".join(f"{k}={v}" for k, v in wildcards.items())
+    todo = (f"reduce the size set by config key '{key}', or run it on a machine with more memory"
+            if key else "most of it is the fixed cost of the rule's libraries: run it on a machine with more memory")
+    return (f"rule {rule} ({what}) needs about {declared / 1024:.1f} GB of memory (natscene.resources estimate), "
+            f"but one job may use {available / 1024:.1f} GB ({source}); {todo} (and set --resources mem_mb or "
+            f"NATSCENE_MEMORY_MB there)")
+
+
+def memory_problems(config: dict, root, global_resources: dict | None = None) -> list[str]:
+    """A line per configured job whose memory estimate exceeds what one job may use (empty: all fit)."""
+    available, source = available_memory_mb(global_resources)
+    out, seen = [], set()
+    for rule, wc, _entry in planned_jobs(config):
+        ident = (rule, tuple(sorted(wc.items())))
+        if ident in seen:
+            continue
+        seen.add(ident)
+        try:
+            declared, key = estimate_mem_mb(rule, config, wc, root)
+        except (KeyError, TypeError):
+            continue  # a dangling reference: reported by natscene.config_checks
+        if declared > available:
+            out.append(refusal(rule, wc, declared, key, available, source))
+    return out
+
+
+def mem_mb(rule: str, config: dict, wildcards: dict, root, global_resources: dict | None = None) -> int:
+    """The ``mem_mb`` of one job for its rule's ``resources``; ConfigError when it cannot fit."""
+    declared, key = estimate_mem_mb(rule, config, wildcards, root)
+    available, source = available_memory_mb(global_resources)
+    if declared > available:
+        raise ConfigError(refusal(rule, dict(wildcards), declared, key, available, source))
+    return declared

@@ -1,0 +1,172 @@
+"""Whole-config checks before any job starts (natscene.config_checks, natscene.resources): every dangling
+cross-reference, missing input file, degenerate camera, sun below the horizon and job too big for the memory
+is refused with the key's path."""
+import copy
+from pathlib import Path
+
+import pytest
+
+from natscene.config import ConfigError, load_yaml_config, validate_config
+from natscene.config_checks import camera_problem, check_config, config_problems
+from natscene.resources import estimate_mem_mb, memory_problems, mem_mb
+
+ROOT = Path(__file__).resolve().parents[1]
+SCHEMA = ROOT / "workflow" / "schemas" / "config.schema.yaml"
+
+
+@pytest.fixture(scope="module")
+def smoke():
+    return validate_config(load_yaml_config(ROOT / "config" / "smoke.yaml"), SCHEMA)
+
+
+@pytest.mark.parametrize("name", ["config.yaml", "smoke.yaml"])
+def test_bundled_configs_have_no_problems(name):
+    cfg = validate_config(load_yaml_config(ROOT / "config" / name), SCHEMA)
+    assert config_problems(cfg, ROOT) == []
+    assert memory_problems(cfg, ROOT, {"mem_mb": 16000}) == []
+
+
+def _set(path, value):
+    def f(c):
+        node = c
+        for k in path[:-1]:
+            node = node[k]
+        node[path[-1]] = value
+    return f
+
+
+CASES = [
+    # cross-references
+    ("keyframe photo", _set(["keyframes", "tiny", "photo"], "nope"), "keyframes.tiny.photo", "'nope' is not in 'photos'"),
+    ("keyframe volume", _set(["keyframes", "tiny", "volume"], "nope"), "keyframes.tiny.volume", "not in 'volumes'"),
+    ("keyframe view", _set(["keyframes", "tiny", "view"], "nope"), "keyframes.tiny.view", "not in 'views'"),
+    ("pair volume", _set(["precompute", "pairs"], [{"volume": "nope", "view": "tiny"}]), "precompute.pairs[0].volume",
+     "not in 'volumes'"),
+    ("pair view", _set(["precompute", "pairs"], [{"volume": "tiny", "view": "nope"}]), "precompute.pairs[0].view",
+     "not in 'views'"),
+    ("shot volume", _set(["shots", "tiny", "volume"], "nope"), "shots.tiny.volume", "not in 'volumes'"),
+    ("shot fit", lambda c: c["shots"]["tiny"]["keyframes"][0].__setitem__("fit", "nope"), "shots.tiny.keyframes[0].fit",
+     "not in 'keyframes'"),
+    ("shot keyframe past end", lambda c: c["shots"]["tiny"]["keyframes"][1].__setitem__("at", 7),
+     "shots.tiny.keyframes[1].at", "past the shot's last frame"),
+    ("shot keyframe without fit or params", lambda c: c["shots"]["tiny"]["keyframes"][0].__setitem__("fit", None),
+     "shots.tiny.keyframes[0].sun", "needed when the keyframe has no 'fit'"),
+    ("mie demo volume", _set(["mie", "demo", "volume"], "nope"), "mie.demo.volume", "not in 'volumes'"),
+    ("composite shot product", _set(["composite", "garden", "background"], {"product": "shots/nope/frames/{frame:04d}.exr"}),
+     "composite.garden.background.product", "not in 'shots'"),
+    ("composite frame past shot", _set(["composite", "garden", "frames"], [0, 5]), "composite.garden.background.product",
+     "past the last frame"),
+    ("composite tiles product", lambda c: c["composite"]["garden"]["ground"].__setitem__(
+        "texture", {"product": "tiles/nope/synth_256x192.exr"}), "composite.garden.ground.texture.product",
+     "not in 'tiles'"),
+    ("composite pattern product", lambda c: c["composite"]["garden"]["leaves"][0].__setitem__(
+        "texture", {"product": "patterns/nope/color.exr"}), "composite.garden.leaves[0].texture.product",
+     "not in 'patterns'"),
+    ("composite leaf date", lambda c: c["composite"]["garden"]["leaves"][1].__setitem__(
+        "texture", {"product": "leaves/maple/normal/12-31.exr"}), "composite.garden.leaves[1].texture.product",
+     "not in 'leaves.dates'"),
+    ("composite unknown product", _set(["composite", "garden", "background"], {"product": "renders/x.exr"}),
+     "composite.garden.background.product", "not a product of any stage"),
+    ("composite shot_state", lambda c: c["composite"]["garden"]["sun"].__setitem__("shot_state", "shots/nope/params/0.yaml"),
+     "composite.garden.sun.shot_state", "not in 'shots'"),
+    # input files
+    ("volume file without path", _set(["volumes", "tiny"], {"kind": "file"}), "volumes.tiny.path", "needed with kind: file"),
+    ("volume file missing", _set(["volumes", "tiny"], {"kind": "file", "path": "nope.npy"}), "volumes.tiny.path", "not found"),
+    ("photo missing", _set(["photos", "kite", "path"], "resources/photos/nope.jpg"), "photos.kite.path", "not found"),
+    ("mask missing", _set(["photos", "kite", "mask"], "nope_mask.png"), "photos.kite.mask", "not found"),
+    ("tile example missing", _set(["tiles", "grass", "path"], "nope.png"), "tiles.grass.path", "not found"),
+    ("recolour photo missing", _set(["recolour", "tiny_flower", "photo"], "nope.jpg"), "recolour.tiny_flower.photo",
+     "not found"),
+    ("petal shape missing", _set(["patterns", "tiny_spot", "shape"], {"kind": "file", "path": "nope.png"}),
+     "patterns.tiny_spot.shape.path", "not found"),
+    ("composite image missing", _set(["composite", "garden", "background"], {"path": "nope_{frame}.png"}),
+     "composite.garden.background.path", "not found"),
+    # geometry
+    ("view camera at look_at", lambda c: c["views"]["tiny"]["camera"].update(position=[0, 0.3, 0], look_at=[0, 0.3, 0]),
+     "views.tiny.camera", "equals look_at"),
+    ("view up parallel", lambda c: c["views"]["tiny"]["camera"].update(position=[0, 0, 0], look_at=[0, 5, 0]),
+     "views.tiny.camera", "parallel to the view direction"),
+    ("shot camera at look_at", lambda c: c["shots"]["tiny"]["keyframes"][1]["camera"].update(
+        position=[1, 1, 1], look_at=[1, 1, 1]), "shots.tiny.keyframes[1].camera", "equals look_at"),
+    ("composite camera up parallel", lambda c: c["composite"]["garden"]["camera"].update(
+        position=[0, 0, 0], look_at=[0, -1, 0]), "composite.garden.camera", "parallel"),
+    ("view sun below horizon", lambda c: c["views"]["tiny"]["sun"].__setitem__("elevation", -5),
+     "views.tiny.sun.elevation", "below the horizon"),
+    ("shot sun below horizon", lambda c: c["shots"]["tiny"]["keyframes"][1]["sun"].__setitem__("elevation", -2),
+     "shots.tiny.keyframes[1].sun.elevation", "below the horizon"),
+    ("composite sun below horizon", _set(["composite", "garden", "sun"], {"azimuth": 10, "elevation": -10}),
+     "composite.garden.sun.elevation", "below the horizon"),
+    ("mie sun below horizon", _set(["mie", "demo", "sun"], {"azimuth": 10, "elevation": 0}), "mie.demo.sun.elevation",
+     "below the horizon"),
+    # value relations
+    ("sigma_t above 1", _set(["precompute", "sigma_t"], [0.0, 0.5, 1.5]), "precompute.sigma_t", "above 1"),
+    ("sigma_t not increasing", _set(["precompute", "sigma_t"], [0.0, 0.5, 0.3]), "precompute.sigma_t",
+     "strictly increasing"),
+    ("g not increasing", _set(["precompute", "g"], [0.5, 0.5]), "precompute.g", "strictly increasing"),
+]
+
+
+@pytest.mark.parametrize("label, mutate, key, words", CASES, ids=[c[0] for c in CASES])
+def test_config_problem_names_the_key(smoke, label, mutate, key, words):
+    cfg = copy.deepcopy(smoke)
+    mutate(cfg)
+    with pytest.raises(ConfigError) as e:
+        check_config(cfg, ROOT, source="smoke.yaml")
+    msg = str(e.value)
+    assert f"config key '{key}'" in msg and words in msg and "smoke.yaml" in msg, msg
+
+
+def test_all_problems_are_reported_at_once(smoke):
+    cfg = copy.deepcopy(smoke)
+    cfg["keyframes"]["tiny"]["photo"] = "nope"
+    cfg["views"]["tiny"]["sun"]["elevation"] = -1
+    assert len(config_problems(cfg, ROOT)) == 2
+
+
+def test_camera_problem_geometry():
+    assert camera_problem({"position": [0, 0, -1], "look_at": [0, 0, 0], "up": [0, 1, 0]}) is None
+    assert camera_problem({"position": [0, 0, 0], "look_at": [0, 0, 0]}) is not None
+    assert camera_problem({"position": [0, 0, 0], "look_at": [0, 0, 1], "up": [0, 0, 2]}) is not None
+    assert camera_problem({"position": [0, 0, 0], "look_at": [0, 0, 1], "up": [0, 0, 0]}) is not None
+    # a nearly-but-not parallel up is fine (the basis is well defined)
+    assert camera_problem({"position": [0, 0, 0], "look_at": [0, 0, 1], "up": [0, 0.01, 1]}) is None
+
+
+# -------------------------------------------------------------------------------------------------- memory
+def test_declared_memory_grows_with_the_inputs(smoke):
+    small, _ = estimate_mem_mb("volume", smoke, {"volume": "tiny"}, ROOT)
+    cfg = copy.deepcopy(smoke)
+    cfg["volumes"]["tiny"]["resolution"] = [512, 512, 512]
+    big, key = estimate_mem_mb("volume", cfg, {"volume": "tiny"}, ROOT)
+    assert big > small and key == "volumes.tiny.resolution"
+    p_small, _ = estimate_mem_mb("precompute", smoke, {"volume": "tiny", "view": "tiny"}, ROOT)
+    cfg["views"]["tiny"]["resolution"] = [1920, 1080]
+    p_big, _ = estimate_mem_mb("precompute", cfg, {"volume": "tiny", "view": "tiny"}, ROOT)
+    assert p_big > p_small
+
+
+def test_job_too_big_is_refused_with_estimate_and_key(smoke, monkeypatch):
+    cfg = copy.deepcopy(smoke)
+    cfg["volumes"]["tiny"]["resolution"] = [1024, 1024, 1024]
+    declared, _ = estimate_mem_mb("volume", cfg, {"volume": "tiny"}, ROOT)
+    monkeypatch.setenv("NATSCENE_MEMORY_MB", str(declared - 100))
+    problems = memory_problems(cfg, ROOT)
+    assert any("rule volume" in p and "volumes.tiny.resolution" in p and "GB" in p for p in problems), problems
+    with pytest.raises(ConfigError, match="volumes.tiny.resolution"):
+        mem_mb("volume", cfg, {"volume": "tiny"}, ROOT)
+    # snakemake --resources mem_mb takes precedence over the environment
+    assert memory_problems(cfg, ROOT, {"mem_mb": 10 ** 7}) == []
+    monkeypatch.setenv("NATSCENE_MEMORY_MB", str(declared + 100))
+    assert not [p for p in memory_problems(cfg, ROOT) if "rule volume" in p]
+
+
+def test_user_grid_size_is_read_from_its_header(smoke, tmp_path):
+    import numpy as np
+    from natscene.resources import grid_file_voxels
+    a = np.lib.format.open_memmap(tmp_path / "g.npy", mode="w+", dtype=np.float32, shape=(512, 300, 512))
+    del a  # a sparse file: the header says 512 x 300 x 512, nothing is read
+    assert grid_file_voxels(tmp_path / "g.npy") == 512 * 300 * 512
+    cfg = copy.deepcopy(smoke)
+    cfg["volumes"]["tiny"] = {"kind": "file", "path": str(tmp_path / "g.npy")}
+    _, key = estimate_mem_mb("volume", cfg, {"volume": "tiny"}, ROOT)
+    assert key == "volumes.tiny.path"
