@@ -7,7 +7,7 @@ workflow uses to declare mem_mb), fits ``peak = base + sum coef * feature`` per 
 squares, and writes rows, fits and the ratio measured / declared to results/benchmarks/memory.json.
 
     .venv/bin/python benchmarks/memory.py [case ...]      # default: all cases (about 15-25 min on 2 cores)
-    .venv/bin/python benchmarks/memory.py --logs DIR      # add the jobs logged under DIR (e.g. a finished run)
+    .venv/bin/python benchmarks/memory.py --merge case    # rerun some cases, keep the other rows of memory.json
 
 Paste the printed MODEL into src/natscene/resources.py after a change to a stage's memory use.
 """
@@ -49,11 +49,11 @@ def _big_photo(tmp: Path, scale: int) -> str:
     return str(out)
 
 
-def _npy_volume(tmp: Path, n: int) -> str:
+def _npy_volume(tmp: Path, n: int, dtype=np.float32) -> str:
     from natscene.volume.procedural import generate
     d = generate("cumulus", (n, n // 2, n), seed=1)
-    out = tmp / f"user_{n}.npy"
-    np.save(out, np.asarray(d, np.float32))
+    out = tmp / f"user_{n}_{np.dtype(dtype).name}.npy"
+    np.save(out, np.asarray(d, dtype))
     return str(out)
 
 
@@ -110,10 +110,42 @@ def case_configs(tmp: Path) -> dict[str, tuple[dict, list[str]]]:
     c["volumes"]["tiny"].update(resolution=[512, 512, 512], blobs=40)
     cases["volume512"] = (c, ["volumes/tiny/preview.png"])
 
+    for n, dtype in ((256, np.float32), (384, np.float32), (256, np.float64)):
+        c = copy.deepcopy(base)
+        c["volumes"]["tiny"] = {"kind": "file", "path": _npy_volume(tmp, n, dtype)}
+        c["views"]["tiny"]["resolution"] = [64, 48]
+        cases[f"npy{n}_{np.dtype(dtype).name}"] = (c, ["volumes/tiny/preview.png"] + (
+            ["precompute/tiny/tiny/contact_sheet.png"] if n == 256 and dtype == np.float32 else []))
+
+    # a large flower photo to recolour and a large ground texture file for the composite
+    import cv2
+
+    from natscene import io
+    flower = io.read_photo(ROOT / "resources" / "photos" / "freshflower.jpg")
+    big_flower = tmp / "flower_x3.png"
+    io.write_png(big_flower, cv2.resize(flower, (1920, 1443), interpolation=cv2.INTER_CUBIC), exposure=1.0)
+    grass = io.read_photo(ROOT / "resources" / "textures" / "grass_meadow_256.png")
+    big_ground = tmp / "grass_4096.png"
+    io.write_png(big_ground, np.tile(grass, (16, 16, 1)), exposure=1.0)
     c = copy.deepcopy(base)
-    c["volumes"]["tiny"] = {"kind": "file", "path": _npy_volume(tmp, 256)}
-    c["views"]["tiny"]["resolution"] = [64, 48]
-    cases["npy256"] = (c, ["volumes/tiny/preview.png", "precompute/tiny/tiny/contact_sheet.png"])
+    c["recolour"]["tiny_flower"]["photo"] = str(big_flower)
+    c["composite"]["garden"].update(frames=[0], resolution=[320, 240], spp=1, reference=False,
+                                    background={"color": [0.3, 0.45, 0.8]}, leaves=[],
+                                    sun={"azimuth": 130, "elevation": 35, "intensity": 3.0},
+                                    ground={"texture": {"path": str(big_ground)}, "size": 6.0, "repeat": 2.0})
+    cases["big_images"] = (c, ["patterns/recolour/tiny_flower/recoloured.png", "composite/garden/0000/final.png"])
+
+    # the main job's sizes: its cumulus and kite view at 256 spp (2 million paths per pass), a 640x480 frame
+    main = load_yaml_config(ROOT / "config" / "config.yaml")
+    c = copy.deepcopy(base)
+    c["volumes"]["tiny"] = dict(main["volumes"]["cumulus"])
+    c["views"]["tiny"] = dict(main["views"]["kite"])
+    c["precompute"]["spp"] = 256
+    c["shots"]["tiny"].update(resolution=[640, 480], frames=1, render={"spp": 16, "orders": 4},
+                              keyframes=copy.deepcopy(cases["large"][0]["shots"]["tiny"]["keyframes"]))
+    c["shots"]["tiny"]["keyframes"][0]["camera"] = dict(main["views"]["kite"]["camera"])
+    c["composite"]["garden"]["frames"] = [0]
+    cases["main_sizes"] = (c, ["precompute/tiny/tiny/contact_sheet.png", "shots/tiny/frames/0000.png"])
     return cases
 
 
@@ -176,15 +208,21 @@ def fit(rows: list[dict]) -> dict:
 
 def main(argv: list[str]) -> None:
     rows = []
-    if argv[:1] == ["--logs"]:
-        cfg = validate_config(load_yaml_config(argv[2] if len(argv) > 2 else ROOT / "config" / "smoke.yaml"),
-                              ROOT / "workflow" / "schemas" / "config.schema.yaml")
-        rows = collect(cfg, Path(argv[1]), "logs")
-        argv = []
+    previous = ROOT / "results" / "benchmarks" / "memory.json"
+    merge = argv[:1] == ["--merge"]
+    argv = argv[1:] if merge else argv
     with tempfile.TemporaryDirectory(prefix="natscene-memory-") as d:
         tmp = Path(d)
         cases = case_configs(tmp)
-        for name in (argv or (list(cases) if not rows else [])):
+        names = argv or list(cases)
+        if merge and previous.is_file():
+            rows = [r for r in json.loads(previous.read_text())["rows"] if r["case"] not in names and r["case"] in cases]
+            for r in rows:  # features of the current natscene.resources
+                cfg = validate_config(copy.deepcopy(cases[r["case"]][0]), ROOT / "workflow" / "schemas" /
+                                      "config.schema.yaml")
+                r["model"], r["features"], _ = job_features(r["rule"], cfg, r["wildcards"], ROOT)
+                r["declared_mb"] = estimate_mem_mb(r["rule"], cfg, r["wildcards"], ROOT)[0]
+        for name in names:
             config, targets = cases[name]
             cfg, work = run_case(name, config, targets, tmp)
             rows += collect(cfg, work, name)

@@ -8,7 +8,7 @@ import pytest
 
 from natscene.config import ConfigError, load_yaml_config, validate_config
 from natscene.config_checks import camera_problem, check_config, config_problems
-from natscene.resources import estimate_mem_mb, memory_problems, mem_mb
+from natscene.resources import MODEL, declared_mb, estimate_mem_mb, mem_mb, memory_problems
 
 ROOT = Path(__file__).resolve().parents[1]
 SCHEMA = ROOT / "workflow" / "schemas" / "config.schema.yaml"
@@ -170,3 +170,20 @@ def test_user_grid_size_is_read_from_its_header(smoke, tmp_path):
     cfg["volumes"]["tiny"] = {"kind": "file", "path": str(tmp_path / "g.npy")}
     _, key = estimate_mem_mb("volume", cfg, {"volume": "tiny"}, ROOT)
     assert key == "volumes.tiny.path"
+
+
+def test_declared_memory_covers_every_measured_peak():
+    """Every job measured by benchmarks/memory.py (peak RSS from the kernel, tests/data/memory_measured.json:
+    smoke to 512^3 volumes, 640x480 frames, 4096^2 textures, 4.9 MP photos) fits in the mem_mb its rule
+    declares for the same inputs, and no rule of the workflow lacks a model."""
+    import json
+    rows = json.loads((ROOT / "tests" / "data" / "memory_measured.json").read_text())
+    short = [(r["case"], r["rule"], r["peak_mb"], declared_mb(r["model"], r["features"])) for r in rows
+             if declared_mb(r["model"], r["features"]) < r["peak_mb"]]
+    assert not short, short
+    assert {r["model"] for r in rows} <= set(MODEL)
+    import re
+    rules = set()
+    for smk in (ROOT / "workflow" / "rules").glob("*.smk"):
+        rules |= set(re.findall(r'estimated_mem_mb\("(\w+)"\)', smk.read_text()))
+    assert rules <= set(MODEL), rules - set(MODEL)

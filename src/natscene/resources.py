@@ -30,30 +30,30 @@ MARGIN = 1.2  # declared = MARGIN * model + SLACK_MB
 SLACK_MB = 200.0
 
 #: rule -> {"base": MB, feature: MB per unit}. Fitted by benchmarks/memory.py (see the module docstring).
-MODEL: dict[str, dict[str, float]] = {
-    "volume": {"base": 250.0, "voxels": 40.0 / MB},
-    "volume_file": {"base": 250.0, "voxels": 40.0 / MB},
-    "precompute": {"base": 900.0, "voxels": 12.0 / MB, "pixels": 0.0, "table_values": 12.0 / MB},
-    "fit": {"base": 400.0, "table_values": 12.0 / MB, "pixels": 0.0},
-    "sky": {"base": 300.0, "pixels": 400.0 / MB},
-    "sky_resample": {"base": 250.0, "pixels": 100.0 / MB},
-    "render_frame": {"base": 900.0, "voxels": 12.0 / MB, "pixels": 2000.0 / MB},
-    "point_scatter": {"base": 400.0, "voxels": 200.0 / MB},
-    "mie_render": {"base": 600.0, "voxels": 60.0 / MB, "pixels": 2000.0 / MB},
-    "mie_deck": {"base": 300.0, "voxels": 40.0 / MB},
-    "mie_table": {"base": 300.0},
-    "mie_table_droplets": {"base": 300.0},
-    "composite": {"base": 900.0, "samples": 600.0 / MB, "texture_pixels": 40.0 / MB},
-    "composite_reference": {"base": 900.0, "spectral_samples": 40.0 / MB, "texture_pixels": 40.0 / MB},
-    "tileset": {"base": 300.0, "pixels": 8000.0 / MB},
-    "tile_texture": {"base": 300.0, "pixels": 60.0 / MB},
-    "pigment_maps": {"base": 300.0, "pixels": 3000.0 / MB},
-    "pattern_color": {"base": 300.0, "pixels": 1000.0 / MB},
-    "pattern_sheet": {"base": 250.0, "pixels": 200.0 / MB},
-    "recolour": {"base": 300.0, "pixels": 1500.0 / MB},
-    "leaf_season": {"base": 300.0, "pixels": 400.0 / MB},
-    "interpolate": {"base": 200.0},
-    "animation": {"base": 250.0, "pixels": 20.0 / MB},
+MODEL: dict[str, dict[str, float]] = {  # bytes per unit / MB; n = measured jobs, residual = largest misfit
+    "animation": {"base": 182.7, "pixels": 35.93 / MB},  # n=2, max residual 0.0 MB
+    "composite": {"base": 216.5, "samples": 0 / MB, "texture_pixels": 178 / MB},  # n=5, max residual 186.8 MB
+    "composite_reference": {"base": 273.1, "spectral_samples": 6.96 / MB, "texture_pixels": 0 / MB},  # n=4, max residual 28.3 MB
+    "fit": {"base": 298.3, "pixels": 2275 / MB, "table_values": 0 / MB},  # n=2, max residual 0.0 MB
+    "interpolate": {"base": 162.0},  # n=8, max residual 0.0 MB
+    "leaf_season": {"base": 266.5, "pixels": 223.5 / MB},  # n=5, max residual 0.0 MB
+    "mie_deck": {"base": 147.6, "voxels": 1405 / MB},  # n=2, max residual 0.0 MB
+    "mie_render": {"base": 330.0, "pixels": 1068 / MB, "voxels": 64.25 / MB},  # n=6, max residual 2.3 MB
+    "mie_table": {"base": 320.0},  # n=2, max residual 0.0 MB
+    "mie_table_droplets": {"base": 319.0},  # n=2, max residual 0.0 MB
+    "pattern_color": {"base": 265.1, "pixels": 249.4 / MB},  # n=4, max residual 0.3 MB
+    "pattern_sheet": {"base": 192.0, "pixels": 256 / MB},  # n=2, max residual 0.0 MB
+    "pigment_maps": {"base": 165.6, "pixels": 725.4 / MB},  # n=4, max residual 4.0 MB
+    "point_scatter": {"base": 227.1, "voxels": 67.19 / MB},  # n=8, max residual 4.6 MB
+    "precompute": {"base": 365.9, "paths": 353.6 / MB, "pixels": 0 / MB, "table_values": 0 / MB, "voxels": 12.15 / MB},  # n=5, max residual 145.3 MB
+    "recolour": {"base": 288.7, "pixels": 452.4 / MB},  # n=3, max residual 0.5 MB
+    "render_frame": {"base": 282.7, "paths": 0 / MB, "pixels": 638.9 / MB, "voxels": 39.65 / MB},  # n=8, max residual 13.5 MB
+    "sky": {"base": 204.5, "pixels": 684.8 / MB},  # n=3, max residual 8.9 MB
+    "sky_resample": {"base": 184.7, "pixels": 62.58 / MB},  # n=2, max residual 0.0 MB
+    "tile_texture": {"base": 185.2, "pixels": 182 / MB},  # n=5, max residual 40.2 MB
+    "tileset": {"base": 184.7, "pixels": 2390 / MB},  # n=4, max residual 0.0 MB
+    "volume": {"base": 181.9, "voxels": 40.13 / MB},  # n=6, max residual 7.1 MB
+    "volume_file": {"base": 167.1, "voxels": 29.74 / MB},  # n=3, max residual 0.0 MB
 }
 
 
@@ -109,6 +109,14 @@ def volume_voxels(config: dict, name: str, root) -> tuple[int, str]:
     return int(np.prod(v.get("resolution", [128, 96, 128]))), f"volumes.{name}.resolution"
 
 
+def _paths_per_pass(pixels: int, spp: int, batch_spp=None) -> int:
+    """Monte Carlo paths in flight in one Dr.Jit pass (natscene.scatter.multiple.trace_orders: about 2 million,
+    at least one sample per pixel, unless batch_spp is given)."""
+    if batch_spp:
+        return pixels * int(batch_spp)
+    return pixels * max(1, min(int(spp), 2_000_000 // max(pixels, 1)))
+
+
 def _pixels(res) -> int:
     return int(res[0]) * int(res[1])
 
@@ -146,13 +154,17 @@ def job_features(rule: str, config: dict, wildcards: dict, root) -> tuple[str, d
     if rule == "volume":
         v = (config.get("volumes") or {}).get(wc["volume"]) or {}
         feats["voxels"], keys["voxels"] = volume_voxels(config, wc["volume"], root)
-        model = "volume_file" if v.get("kind") == "file" else "volume"
+        if v.get("kind") == "file":
+            model = "volume_file"  # import: measured the same for float32 and float64 .npy files
     elif rule == "precompute":
         view = config["views"][wc["view"]]
         p = _pixels(view.get("resolution", [320, 240]))
         feats["voxels"], keys["voxels"] = volume_voxels(config, wc["volume"], root)
         feats["pixels"], keys["pixels"] = p, f"views.{wc['view']}.resolution"
         feats["table_values"], keys["table_values"] = _table_values(config, p), f"views.{wc['view']}.resolution"
+        pre = config.get("precompute") or {}
+        feats["paths"] = _paths_per_pass(p, pre.get("spp", 256), pre.get("batch_spp"))
+        keys["paths"] = "precompute.batch_spp"
     elif rule == "fit":
         kf = config["keyframes"][wc["keyframe"]]
         p = _pixels(config["views"][kf["view"]].get("resolution", [320, 240]))
@@ -165,7 +177,10 @@ def job_features(rule: str, config: dict, wildcards: dict, root) -> tuple[str, d
     elif rule == "render_frame":
         shot = config["shots"][wc["shot"]]
         feats["voxels"], keys["voxels"] = volume_voxels(config, shot["volume"], root)
-        feats["pixels"], keys["pixels"] = _pixels(shot.get("resolution", [640, 480])), f"shots.{wc['shot']}.resolution"
+        p = _pixels(shot.get("resolution", [640, 480]))
+        feats["pixels"], keys["pixels"] = p, f"shots.{wc['shot']}.resolution"
+        feats["paths"] = _paths_per_pass(p, (shot.get("render") or {}).get("spp", 16))
+        keys["paths"] = f"shots.{wc['shot']}.resolution"
     elif rule in ("point_scatter", "mie_deck"):
         name = wc.get("volume", "mie_deck")
         feats["voxels"], keys["voxels"] = volume_voxels(config, name, root)
@@ -222,17 +237,21 @@ def model_mb(model: str, feats: dict) -> float:
     return coef.get("base", 0.0) + sum(coef.get(f, 0.0) * float(v) for f, v in feats.items())
 
 
+def declared_mb(model: str, feats: dict) -> int:
+    """The ``mem_mb`` declared for a modelled peak: MARGIN x model + SLACK_MB, rounded up to 100 MB."""
+    return int(math.ceil((MARGIN * model_mb(model, feats) + SLACK_MB) / 100.0) * 100)
+
+
 def estimate_mem_mb(rule: str, config: dict, wildcards: dict, root) -> tuple[int, str]:
     """(declared mem_mb, the config key of the input that dominates the estimate) of one job.
 
     The key is '' when the fixed part (libraries, renderer set-up) dominates: no config key makes it smaller.
     """
     model, feats, keys = job_features(rule, config, wildcards, root)
-    peak = model_mb(model, feats)
     coef = MODEL.get(model, {})
     parts = {f: coef.get(f, 0.0) * float(v) for f, v in feats.items()}
     top = max(parts, key=parts.get) if parts else None
-    declared = int(math.ceil((MARGIN * peak + SLACK_MB) / 100.0) * 100)
+    declared = declared_mb(model, feats)
     if top is None or parts[top] < coef.get("base", 0.0):
         return declared, ""
     return declared, keys.get(top, "")

@@ -42,11 +42,19 @@ def setup_logging(log_path: str | None, name: str = "natscene") -> logging.Logge
 
 
 def peak_rss_mb() -> float:
-    """Peak resident memory (MB) of this process and of its finished children (getrusage, exact)."""
+    """Peak resident memory (MB) of this process (the kernel's high-water mark VmHWM) and of its largest
+    finished child (getrusage). Not getrusage(RUSAGE_SELF): it survives execve, so a script started by a
+    forked Snakemake would report at least Snakemake's own peak."""
     import resource
 
-    kb = max(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss, resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss)
-    return kb / 1024.0  # Linux reports kilobytes
+    own = 0.0
+    try:
+        for line in Path("/proc/self/status").read_text().splitlines():
+            if line.startswith("VmHWM:"):
+                own = float(line.split()[1])  # kB
+    except OSError:
+        own = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    return max(own, resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss) / 1024.0
 
 
 def _log_peak_memory(snakemake, logger) -> None:
