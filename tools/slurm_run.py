@@ -1,0 +1,235 @@
+"""Run the natscene workflow on a SLURM cluster through the profile workflow/profiles/slurm.
+
+    .venv/bin/python tools/slurm_run.py [--account A] [--partition P] [--max-threads N] [-- SNAKEMAKE ARGS]
+
+What the profile cannot know is filled in here, from the command line, else the environment, else the cluster:
+
+- partition: ``--partition``, ``$NATSCENE_SLURM_PARTITION``, ``$SBATCH_PARTITION``, else the cluster's default
+  partition (the one ``sinfo`` marks with ``*``); a partition that does not exist stops here, before
+  anything is submitted, with the list of those that do;
+- account: ``--account``, ``$NATSCENE_SLURM_ACCOUNT``, ``$SBATCH_ACCOUNT``, else your default account
+  (``sacctmgr show user``), else none (clusters without accounts);
+- ``--max-threads``: the CPUs of the smallest node of that partition (or ``--max-threads N`` if smaller), so
+  that the profile's thread counts never ask more CPUs than a node has.
+
+Every other argument goes to Snakemake unchanged (``--configfile``, targets, ``-n``, ``--directory``...).
+When the run fails, the failed SLURM jobs of this run are listed from ``sacct`` with what happened
+(out of memory, time limit, node failure, a job's own error), where their logs are and how to resume.
+Exit status: Snakemake's, or 2 when the run could not start (no SLURM, unknown partition or account).
+"""
+from __future__ import annotations
+
+import argparse
+import getpass
+import os
+import re
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+PROFILE = ROOT / "workflow" / "profiles" / "slurm"
+
+
+class SetupError(RuntimeError):
+    """The run cannot start: the message says why and what to do."""
+
+
+def _slurm(*cmd: str) -> str:
+    """stdout of a SLURM client command; SetupError with its stderr if it fails."""
+    try:
+        proc = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
+    except FileNotFoundError:
+        raise SetupError(f"'{cmd[0]}' is not on the PATH") from None
+    except subprocess.TimeoutExpired:
+        raise SetupError(f"'{' '.join(cmd)}' did not answer within 120 s: is the SLURM controller up?") from None
+    if proc.returncode != 0:
+        raise SetupError(f"'{' '.join(cmd)}' failed: {proc.stderr.strip() or proc.stdout.strip()}")
+    return proc.stdout
+
+
+def check_slurm() -> None:
+    """SLURM's clients are installed and the controller answers."""
+    missing = [c for c in ("sbatch", "sinfo", "sacct", "squeue") if shutil.which(c) is None]
+    if missing:
+        raise SetupError(
+            f"no SLURM here: {', '.join(missing)} not on the PATH. Run this on a SLURM login node, or start a "
+            f"one-node SLURM on this machine with `tools/slurm-local.sh start` (root; `make cluster-smoke` "
+            f"does it). Nothing was submitted.")
+    try:
+        _slurm("sinfo", "-h", "-o", "%P")
+    except SetupError as e:
+        raise SetupError(f"SLURM is installed but its controller does not answer ({e}). Check `sinfo`; on this "
+                         f"machine `tools/slurm-local.sh status`. Nothing was submitted.") from None
+    try:
+        import snakemake_executor_plugin_slurm  # noqa: F401
+    except ImportError:
+        raise SetupError(
+            "the Snakemake SLURM executor is not installed in this environment: run `make cluster-setup` "
+            "(or `.venv/bin/pip install -e '.[cluster]'`). Nothing was submitted.") from None
+
+
+def partitions() -> dict[str, bool]:
+    """Partition name -> is the default partition."""
+    out = {}
+    for name in _slurm("sinfo", "-h", "-o", "%P").split():
+        out[name.rstrip("*")] = name.endswith("*")
+    return out
+
+
+def pick_partition(requested: str | None) -> str:
+    parts = partitions()
+    if requested:
+        if requested not in parts:
+            raise SetupError(f"partition '{requested}' does not exist on this cluster; partitions: "
+                             f"{', '.join(parts) or '(none)'}. Nothing was submitted.")
+        return requested
+    default = [p for p, d in parts.items() if d]
+    if not default:
+        raise SetupError(f"no partition given and the cluster has no default partition: pass --partition "
+                         f"(one of {', '.join(parts) or '(none)'}) or set NATSCENE_SLURM_PARTITION.")
+    return default[0]
+
+
+def pick_account(requested: str | None) -> str | None:
+    """The account to charge; None when the cluster has no accounts for this user."""
+    user = getpass.getuser()
+    try:
+        assoc = _slurm("sacctmgr", "-n", "-P", "show", "assoc", f"user={user}", "format=account")
+        accounts = sorted({a.strip() for a in assoc.split() if a.strip()})
+        default = _slurm("sacctmgr", "-n", "-P", "show", "user", user, "format=defaultaccount").strip() or None
+    except SetupError:  # no accounting database: sbatch decides
+        return requested
+    if requested:
+        if accounts and requested not in accounts:
+            raise SetupError(f"account '{requested}' is not one of yours on this cluster ({user}: "
+                             f"{', '.join(accounts)}). Nothing was submitted.")
+        return requested
+    return default
+
+
+def node_cpus(partition: str) -> int:
+    """CPUs of the smallest node of ``partition``."""
+    cpus = [int(c) for c in _slurm("sinfo", "-h", "-N", "-p", partition, "-o", "%c").split() if c.isdigit()]
+    if not cpus:
+        raise SetupError(f"partition '{partition}' has no nodes")
+    return min(cpus)
+
+
+def build_command(partition: str, account: str | None, max_threads: int, extra: list[str]) -> list[str]:
+    resources = [f"slurm_partition={partition}"] + ([f"slurm_account={account}"] if account else [])
+    cmd = [sys.executable, "-m", "snakemake", "--workflow-profile", str(PROFILE),
+           "--max-threads", str(max_threads), "--default-resources", *resources]
+    if not account:
+        cmd.append("--slurm-no-account")
+    if "-s" not in extra and "--snakefile" not in extra:
+        cmd += ["--snakefile", str(ROOT / "Snakefile")]
+    return cmd + extra
+
+
+ADVICE = {
+    "OUT_OF_MEMORY": "killed by the node for using more memory than it asked for ({reqmem}): give the rule more "
+                     "with `--set-resources {rule}:mem_mb=<MB>` (or in workflow/profiles/slurm/config.yaml)",
+    "TIMEOUT": "ran past its time limit ({timelimit}): raise it with `--set-resources {rule}:runtime=<minutes>`",
+    "NODE_FAIL": "its node failed: resubmitting it is usually enough",
+    "BOOT_FAIL": "its node failed to boot: resubmitting it is usually enough",
+    "CANCELLED": "cancelled (by you, an administrator, or preemption)",
+    "PREEMPTED": "preempted by a higher-priority job",
+    "DEADLINE": "missed its deadline",
+    "FAILED": "the job itself failed: read its log",
+}
+
+
+def failed_jobs(run_id: str) -> list[dict]:
+    """This run's SLURM jobs that did not complete (from sacct; empty if sacct does not answer)."""
+    fields = ["JobID", "Comment", "State", "ExitCode", "ReqMem", "Timelimit", "Elapsed", "NodeList"]
+    try:
+        out = _slurm("sacct", "-X", "-n", "-P", "--name", run_id, "-S", "now-7days",
+                     "-o", ",".join(f + "%200" for f in fields))
+    except SetupError:
+        return []
+    jobs = []
+    for line in out.splitlines():
+        row = dict(zip(fields, line.split("|")))
+        state = row.get("State", "").split()[0] if row.get("State") else ""
+        if state and state not in ("COMPLETED", "RUNNING", "PENDING"):
+            row["State"] = state
+            jobs.append(row)
+    return jobs
+
+
+def explain_failure(output: str, workdir: Path) -> str:
+    """What went wrong, per failed SLURM job of this run, and how to resume."""
+    lines = []
+    m = re.search(r"SLURM run ID: (\S+)", output)
+    if "SLURM sbatch failed" in output or "sbatch: error" in output:
+        lines.append("SLURM refused a submission (see 'sbatch: error' above): fix the request (partition, "
+                     "account, memory or CPUs larger than any node) and rerun.")
+    for job in failed_jobs(m.group(1)) if m else []:
+        cm = re.match(r"rule_(\w+?)(?:_wildcards_(.*))?$", job.get("Comment", ""))
+        rule = cm.group(1) if cm else "?"
+        what = ADVICE.get(job["State"], "see its log").format(rule=rule, reqmem=job.get("ReqMem", "?"),
+                                                              timelimit=job.get("Timelimit", "?"))
+        logs = list((workdir / ".snakemake" / "slurm_logs").glob(f"rule_{rule}/**/{job['JobID']}.log"))
+        where = f" Log: {logs[0]}" if logs else ""
+        wild = f" ({cm.group(2)})" if cm and cm.group(2) else ""
+        lines.append(f"  job {job['JobID']}, rule {rule}{wild}: {job['State']} - {what}.{where}")
+    if lines and not lines[0].startswith("SLURM refused"):
+        lines.insert(0, "SLURM jobs of this run that did not complete:")
+    lines.append(
+        "Nothing a failed job started is counted as done: Snakemake removed its outputs (natscene writes every "
+        "output atomically, so no half-written file exists). Resume with the same command: finished outputs "
+        "are kept, only the missing ones are made (the profile sets --rerun-incomplete, which also redoes "
+        "jobs cut off when Snakemake itself was stopped). Rule logs: results/logs/<rule>/; SLURM logs: "
+        ".snakemake/slurm_logs/rule_<rule>/<wildcards>/<jobid>.log (kept for failed jobs).")
+    return "\n".join(lines)
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
+                                 formatter_class=argparse.RawDescriptionHelpFormatter,
+                                 epilog="Arguments after -- (or not recognised here) go to Snakemake.")
+    ap.add_argument("--account", default=os.environ.get("NATSCENE_SLURM_ACCOUNT") or os.environ.get("SBATCH_ACCOUNT"),
+                    help="SLURM account (default: $NATSCENE_SLURM_ACCOUNT, $SBATCH_ACCOUNT, your default account)")
+    ap.add_argument("--partition",
+                    default=os.environ.get("NATSCENE_SLURM_PARTITION") or os.environ.get("SBATCH_PARTITION"),
+                    help="SLURM partition (default: $NATSCENE_SLURM_PARTITION, $SBATCH_PARTITION, the cluster's "
+                         "default partition)")
+    ap.add_argument("--max-threads", type=int, default=None,
+                    help="cap on any job's threads (default and upper bound: the CPUs of the partition's "
+                         "smallest node)")
+    args, extra = ap.parse_known_args(argv)
+    if extra[:1] == ["--"]:
+        extra = extra[1:]
+    try:
+        check_slurm()
+        partition = pick_partition(args.partition)
+        account = pick_account(args.account)
+        cpus = node_cpus(partition)
+    except SetupError as e:
+        print(f"slurm_run: {e}", file=sys.stderr)
+        return 2
+    max_threads = min(cpus, args.max_threads) if args.max_threads else cpus
+    cmd = build_command(partition, account, max_threads, extra)
+    print(f"slurm_run: partition {partition}, account {account or '(none)'}, at most {max_threads} threads "
+          f"per job (smallest node: {cpus} CPUs)", file=sys.stderr, flush=True)
+    print("slurm_run: " + " ".join(cmd), file=sys.stderr, flush=True)
+    # Snakemake's output goes to the terminal as it comes; a copy is kept to find the run's SLURM jobs.
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, bufsize=1)
+    captured = []
+    assert proc.stdout is not None
+    for line in proc.stdout:
+        sys.stdout.write(line)
+        sys.stdout.flush()
+        captured.append(line)
+    rc = proc.wait()
+    if rc != 0 and "-n" not in extra and "--dry-run" not in extra:
+        workdir = Path(extra[extra.index("--directory") + 1]) if "--directory" in extra else Path.cwd()
+        print("\nslurm_run: the run did not complete.\n" + explain_failure("".join(captured), workdir),
+              file=sys.stderr)
+    return rc
+
+
+if __name__ == "__main__":
+    sys.exit(main())
