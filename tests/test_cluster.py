@@ -53,6 +53,8 @@ needs_slurm = pytest.mark.skipif(
     reason="no SLURM on this machine (sbatch not on the PATH); `make cluster-setup` installs it, "
            "`make cluster-smoke` runs this check")
 needs_root = pytest.mark.skipif(os.geteuid() != 0, reason="the local SLURM cluster's daemons need root")
+# CI (`make test`) deselects these: together 8-15 min on 2 cores, more than the rest of the suite.
+cluster_mark = pytest.mark.cluster
 
 
 @pytest.fixture(scope="module")
@@ -66,6 +68,7 @@ def cluster():
         _run(["bash", str(LOCAL_CLUSTER), "stop"])
 
 
+@cluster_mark
 @needs_slurm
 @needs_root
 def test_cluster_smoke_matches_a_local_run(cluster, tmp_path):
@@ -78,6 +81,7 @@ def test_cluster_smoke_matches_a_local_run(cluster, tmp_path):
     assert "COMPLETED" in out
 
 
+@cluster_mark
 @needs_slurm
 @needs_root
 def test_unknown_partition_is_refused_before_submitting(cluster, tmp_path):
@@ -90,6 +94,7 @@ def test_unknown_partition_is_refused_before_submitting(cluster, tmp_path):
     assert not workdir.exists()
 
 
+@cluster_mark
 @needs_slurm
 @needs_root
 def test_unknown_partition_through_the_profile_directly(cluster, tmp_path):
@@ -106,6 +111,7 @@ def test_unknown_partition_through_the_profile_directly(cluster, tmp_path):
     assert not (workdir / "results" / "volumes" / "tiny" / "meta.yaml").exists()
 
 
+@cluster_mark
 @needs_slurm
 @needs_root
 def test_out_of_memory_job_is_reported_and_resumable(cluster, tmp_path):

@@ -287,7 +287,11 @@ cmd_start() {
   start_slurmd
   link_config
   say "cluster '$CLUSTER' up: partition '$PARTITION', account '$ACCOUNT', node $(sinfo -h -o '%n %c CPUs %m MB')"
-  say "clients need: export SLURM_CONF=$SLURM_CONF"
+  if [ "$(readlink "$RUNLINK" 2>/dev/null)" = "$ETC" ]; then
+    say "sbatch, squeue, sacct... on this machine find it by themselves ($RUNLINK -> $ETC)"
+  else
+    say "clients need: export SLURM_CONF=$SLURM_CONF"
+  fi
 }
 
 stop_one() {  # stop_one NAME: SIGTERM the pid in its pid file, wait, then SIGKILL

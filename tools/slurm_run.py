@@ -109,16 +109,21 @@ def pick_account(requested: str | None) -> str | None:
     return default
 
 
-def node_cpus(partition: str) -> int:
-    """CPUs of the smallest node of ``partition``."""
-    cpus = [int(c) for c in _slurm("sinfo", "-h", "-N", "-p", partition, "-o", "%c").split() if c.isdigit()]
-    if not cpus:
+def node_size(partition: str) -> tuple[int, int]:
+    """(CPUs, memory in MB) of the smallest node of ``partition``."""
+    rows = [line.split() for line in _slurm("sinfo", "-h", "-N", "-p", partition, "-o", "%c %m").splitlines()]
+    rows = [(int(c), int(m.rstrip("+"))) for c, m in (r for r in rows if len(r) == 2) if c.isdigit()]
+    if not rows:
         raise SetupError(f"partition '{partition}' has no nodes")
-    return min(cpus)
+    return min(c for c, _ in rows), min(m for _, m in rows)
 
 
 def build_command(partition: str, account: str | None, max_threads: int, extra: list[str]) -> list[str]:
-    resources = [f"slurm_partition={partition}"] + ([f"slurm_account={account}"] if account else [])
+    # --default-resources on the command line replaces the profile's whole `default-resources`: repeat those
+    import yaml
+    profile = yaml.safe_load((PROFILE / "config.yaml").read_text()) or {}
+    resources = [f"{k}={v}" for k, v in (profile.get("default-resources") or {}).items()]
+    resources += [f"slurm_partition={partition}"] + ([f"slurm_account={account}"] if account else [])
     cmd = [sys.executable, "-m", "snakemake", "--workflow-profile", str(PROFILE),
            "--max-threads", str(max_threads), "--default-resources", *resources]
     if not account:
@@ -163,10 +168,12 @@ def explain_failure(output: str, workdir: Path) -> str:
     """What went wrong, per failed SLURM job of this run, and how to resume."""
     lines = []
     m = re.search(r"SLURM run ID: (\S+)", output)
+    if not m:  # Snakemake stopped before its executor started: its own message above says why
+        return "Snakemake stopped before submitting anything (see its message above); nothing was submitted."
     if "SLURM sbatch failed" in output or "sbatch: error" in output:
         lines.append("SLURM refused a submission (see 'sbatch: error' above): fix the request (partition, "
                      "account, memory or CPUs larger than any node) and rerun.")
-    for job in failed_jobs(m.group(1)) if m else []:
+    for job in failed_jobs(m.group(1)):
         cm = re.match(r"rule_(\w+?)(?:_wildcards_(.*))?$", job.get("Comment", ""))
         rule = cm.group(1) if cm else "?"
         what = ADVICE.get(job["State"], "see its log").format(rule=rule, reqmem=job.get("ReqMem", "?"),
@@ -206,17 +213,19 @@ def main(argv: list[str] | None = None) -> int:
         check_slurm()
         partition = pick_partition(args.partition)
         account = pick_account(args.account)
-        cpus = node_cpus(partition)
+        cpus, mem_mb = node_size(partition)
     except SetupError as e:
         print(f"slurm_run: {e}", file=sys.stderr)
         return 2
     max_threads = min(cpus, args.max_threads) if args.max_threads else cpus
     cmd = build_command(partition, account, max_threads, extra)
     print(f"slurm_run: partition {partition}, account {account or '(none)'}, at most {max_threads} threads "
-          f"per job (smallest node: {cpus} CPUs)", file=sys.stderr, flush=True)
+          f"per job (smallest node: {cpus} CPUs, {mem_mb} MB)", file=sys.stderr, flush=True)
     print("slurm_run: " + " ".join(cmd), file=sys.stderr, flush=True)
     # Snakemake's output goes to the terminal as it comes; a copy is kept to find the run's SLURM jobs.
-    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, bufsize=1)
+    # the memory one job can have: a node's, not this login host's (natscene.resources refuses bigger jobs)
+    env = dict(os.environ, NATSCENE_MEMORY_MB=os.environ.get("NATSCENE_MEMORY_MB", str(mem_mb)))
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, bufsize=1, env=env)
     captured = []
     assert proc.stdout is not None
     for line in proc.stdout:
