@@ -131,6 +131,8 @@ AccountingStoragePass=$RUN/munge.socket
 AccountingStorageEnforce=associations
 AccountingStoreFlags=job_comment
 ReturnToService=2
+# a job asking more CPUs or memory than the node has is refused by sbatch instead of pending forever
+EnforcePartLimits=ALL
 MinJobAge=300
 KillWait=10
 $node_line State=UNKNOWN
