@@ -6,15 +6,16 @@
 #   tools/slurm-local.sh stop      stop the daemons this script started (by their pid files)
 #   tools/slurm-local.sh status    which daemons run, sinfo, and the line to export for the clients
 #   tools/slurm-local.sh env       print `export SLURM_CONF=...` (eval "$(tools/slurm-local.sh env)")
-#   tools/slurm-local.sh install   only install the packages (`make cluster-setup`)
+#   tools/slurm-local.sh install   only install the packages
 #
 # Daemons (Debian 12 packages slurm-wlm 22.05, slurmdbd, mariadb-server, munge): munged, mariadbd (the
 # accounting database), slurmdbd (accounting: `sacct` answers, which the Snakemake SLURM executor needs to
 # see that a job finished), slurmctld and slurmd (one node: all CPUs and memory of this machine, partition
 # `debug`, cgroup memory limits so a job over its --mem is killed as OUT_OF_MEMORY like on a real cluster).
 # Everything they write (configs, pid files, spool, logs, database) lives in $NATSCENE_SLURM_HOME
-# (default /tmp/natscene-slurm), nothing under /etc. Clients (sbatch, squeue, sacct, Snakemake) find this
-# cluster through SLURM_CONF=$NATSCENE_SLURM_HOME/etc/slurm.conf.
+# (default /tmp/natscene-slurm), nothing under /etc. Clients (sbatch, squeue, sacct, Snakemake, srun inside
+# jobs) find this cluster through the link /run/slurm/conf -> $NATSCENE_SLURM_HOME/etc, made while it runs
+# (where SLURM clients look for a configless node's config), or SLURM_CONF=$NATSCENE_SLURM_HOME/etc/slurm.conf.
 #
 # Needs root (apt-get, daemons). Idempotent: `start` on a running cluster only checks it; `stop` on a
 # stopped one does nothing. Ports (change with the variables below if they are taken):
@@ -69,7 +70,7 @@ pid_of() {  # the pid in $RUN/$1.pid if that process is alive and is the daemon 
   [ -s "$f" ] || return 1
   pid=$(tr -dc '0-9' < "$f")
   [ -n "$pid" ] && kill -0 "$pid" 2>/dev/null || return 1
-  grep -q "$1" "/proc/$pid/comm" 2>/dev/null || return 1
+  [ "$(cat "/proc/$pid/comm" 2>/dev/null)" = "$1" ] || return 1  # not a recycled pid
   echo "$pid"
 }
 running() { pid_of "$1" >/dev/null; }
@@ -92,11 +93,12 @@ write_configs() {
   node_line=$(slurmd -C | head -1)
   mem=$(sed -n 's/.*RealMemory=\([0-9]*\).*/\1/p' <<< "$node_line")
   node_line=$(sed "s/RealMemory=[0-9]*/RealMemory=$((mem > 1024 ? mem - 512 : mem))/" <<< "$node_line")
-  local cgroup_ok=0
-  [ -d /sys/fs/cgroup/memory ] || [ -f /sys/fs/cgroup/cgroup.controllers ] && cgroup_ok=1
-  local proctrack=proctrack/linuxproc task=task/none gather=jobacct_gather/linux
-  if [ $cgroup_ok = 1 ] && [ "${NATSCENE_SLURM_CGROUP:-1}" = 1 ]; then
-    proctrack=proctrack/cgroup task=task/cgroup gather=jobacct_gather/cgroup
+  # Memory limits: cgroup v1 (the kernel kills a job at its --mem, state OUT_OF_MEMORY); SLURM 22.05's cgroup v2
+  # plugin wants systemd, so without a v1 memory hierarchy (or with NATSCENE_SLURM_CGROUP=0) the accounting
+  # poller kills a job seen above its --mem instead (every 5 s, JobAcctGatherParams=OverMemoryKill).
+  local proctrack=proctrack/linuxproc task=task/none gather=jobacct_gather/linux gather_params=OverMemoryKill
+  if [ -d /sys/fs/cgroup/memory ] && [ "${NATSCENE_SLURM_CGROUP:-1}" = 1 ]; then
+    proctrack=proctrack/cgroup task=task/cgroup gather=jobacct_gather/cgroup gather_params=
   fi
   cat > "$ETC/slurm.conf" <<EOF
 # written by tools/slurm-local.sh: a one-node cluster with accounting (slurmdbd)
@@ -122,6 +124,7 @@ ProctrackType=$proctrack
 TaskPlugin=$task
 JobAcctGatherType=$gather
 JobAcctGatherFrequency=5
+${gather_params:+JobAcctGatherParams=$gather_params}
 SelectType=select/cons_tres
 SelectTypeParameters=CR_Core_Memory
 AccountingStorageType=accounting_storage/slurmdbd
@@ -140,7 +143,7 @@ PartitionName=$PARTITION Nodes=$NODE Default=YES MaxTime=INFINITE State=UP
 EOF
   cat > "$ETC/cgroup.conf" <<EOF
 # written by tools/slurm-local.sh: a job is held to the memory it asked for (--mem), as on a real cluster
-CgroupPlugin=autodetect
+CgroupPlugin=cgroup/v1
 ConstrainCores=yes
 ConstrainRAMSpace=yes
 AllowedRAMSpace=100

@@ -135,7 +135,7 @@ def build_command(partition: str, account: str | None, max_threads: int, extra: 
 
 ADVICE = {
     "OUT_OF_MEMORY": "killed by the node for using more memory than it asked for ({reqmem}): give the rule more "
-                     "with `--set-resources {rule}:mem_mb=<MB>` (or in workflow/profiles/slurm/config.yaml)",
+                     "with `--set-resources {rule}:mem_mb=<MB>` (or under set-resources in workflow/profiles/slurm/config.yaml)",
     "TIMEOUT": "ran past its time limit ({timelimit}): raise it with `--set-resources {rule}:runtime=<minutes>`",
     "NODE_FAIL": "its node failed: resubmitting it is usually enough",
     "BOOT_FAIL": "its node failed to boot: resubmitting it is usually enough",
@@ -147,21 +147,37 @@ ADVICE = {
 
 
 def failed_jobs(run_id: str) -> list[dict]:
-    """This run's SLURM jobs that did not complete (from sacct; empty if sacct does not answer)."""
+    """This run's SLURM jobs that did not complete (from sacct; empty if sacct does not answer).
+
+    A job whose step was killed for its memory ends FAILED while the step says OUT_OF_MEMORY (the kernel
+    killed the rule's process, the job's Snakemake saw it die): such a job is reported as OUT_OF_MEMORY.
+    """
     fields = ["JobID", "Comment", "State", "ExitCode", "ReqMem", "Timelimit", "Elapsed", "NodeList"]
     try:
-        out = _slurm("sacct", "-X", "-n", "-P", "--name", run_id, "-S", "now-7days",
+        out = _slurm("sacct", "-n", "-P", "--name", run_id, "-S", "now-7days",
                      "-o", ",".join(f + "%200" for f in fields))
     except SetupError:
         return []
-    jobs = []
+    jobs: dict[str, dict] = {}
+    step_states: dict[str, set] = {}
     for line in out.splitlines():
         row = dict(zip(fields, line.split("|")))
         state = row.get("State", "").split()[0] if row.get("State") else ""
-        if state and state not in ("COMPLETED", "RUNNING", "PENDING"):
+        job_id, _, step = row.get("JobID", "").partition(".")
+        if not job_id:
+            continue
+        if step:
+            step_states.setdefault(job_id, set()).add(state)
+        else:
             row["State"] = state
-            jobs.append(row)
-    return jobs
+            jobs[job_id] = row
+    failed = []
+    for job_id, row in jobs.items():
+        if "OUT_OF_MEMORY" in step_states.get(job_id, set()):
+            row["State"] = "OUT_OF_MEMORY"
+        if row["State"] not in ("COMPLETED", "RUNNING", "PENDING", ""):
+            failed.append(row)
+    return failed
 
 
 def explain_failure(output: str, workdir: Path) -> str:
@@ -173,17 +189,19 @@ def explain_failure(output: str, workdir: Path) -> str:
     if "SLURM sbatch failed" in output or "sbatch: error" in output:
         lines.append("SLURM refused a submission (see 'sbatch: error' above): fix the request (partition, "
                      "account, memory or CPUs larger than any node) and rerun.")
-    for job in failed_jobs(m.group(1)):
+    failed = failed_jobs(m.group(1))
+    if failed:
+        lines.append("SLURM jobs of this run that did not complete:")
+    for job in failed:
         cm = re.match(r"rule_(\w+?)(?:_wildcards_(.*))?$", job.get("Comment", ""))
         rule = cm.group(1) if cm else "?"
         what = ADVICE.get(job["State"], "see its log").format(rule=rule, reqmem=job.get("ReqMem", "?"),
                                                               timelimit=job.get("Timelimit", "?"))
-        logs = list((workdir / ".snakemake" / "slurm_logs").glob(f"rule_{rule}/**/{job['JobID']}.log"))
+        pattern = f"rule_{rule}/**/{job['JobID']}.log" if cm else f"**/{job['JobID']}.log"
+        logs = sorted((workdir / ".snakemake" / "slurm_logs").glob(pattern))
         where = f" Log: {logs[0]}" if logs else ""
         wild = f" ({cm.group(2)})" if cm and cm.group(2) else ""
         lines.append(f"  job {job['JobID']}, rule {rule}{wild}: {job['State']} - {what}.{where}")
-    if lines and not lines[0].startswith("SLURM refused"):
-        lines.insert(0, "SLURM jobs of this run that did not complete:")
     lines.append(
         "Nothing a failed job started is counted as done: Snakemake removed its outputs (natscene writes every "
         "output atomically, so no half-written file exists). Resume with the same command: finished outputs "
@@ -194,7 +212,7 @@ def explain_failure(output: str, workdir: Path) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0], allow_abbrev=False,
                                  formatter_class=argparse.RawDescriptionHelpFormatter,
                                  epilog="Arguments after -- (or not recognised here) go to Snakemake.")
     ap.add_argument("--account", default=os.environ.get("NATSCENE_SLURM_ACCOUNT") or os.environ.get("SBATCH_ACCOUNT"),
@@ -234,7 +252,12 @@ def main(argv: list[str] | None = None) -> int:
         captured.append(line)
     rc = proc.wait()
     if rc != 0 and "-n" not in extra and "--dry-run" not in extra:
-        workdir = Path(extra[extra.index("--directory") + 1]) if "--directory" in extra else Path.cwd()
+        workdir = Path.cwd()
+        for i, a in enumerate(extra):
+            if a in ("-d", "--directory") and i + 1 < len(extra):
+                workdir = Path(extra[i + 1])
+            elif a.startswith("--directory="):
+                workdir = Path(a.split("=", 1)[1])
         print("\nslurm_run: the run did not complete.\n" + explain_failure("".join(captured), workdir),
               file=sys.stderr)
     return rc
