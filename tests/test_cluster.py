@@ -51,6 +51,25 @@ def test_no_slurm_is_refused_with_a_clear_message(tmp_path):
     assert not workdir.exists()
 
 
+def test_memory_kill_without_cgroups_is_reported_as_out_of_memory(tmp_path, monkeypatch):
+    """Clusters without cgroup limits kill a job over its --mem from the accounting poller: sacct says
+    FAILED/CANCELLED, the job's log says why. The summary reports it as out of memory, with the rule and log."""
+    sys.path.insert(0, str(ROOT / "tools"))
+    import slurm_run
+
+    log = tmp_path / ".snakemake" / "slurm_logs" / "rule_sky" / "kite" / "98.log"
+    log.parent.mkdir(parents=True)
+    # slurmstepd's words, as written by SLURM 22.05 with JobAcctGatherParams=OverMemoryKill
+    log.write_text("slurmstepd-vm: error: StepId=98.batch exceeded memory limit (1588334592 > 209715200), "
+                   "being killed\nslurmstepd-vm: error: Exceeded job memory limit\n")
+    monkeypatch.setattr(slurm_run, "failed_jobs", lambda run_id: [
+        {"JobID": "98", "Comment": "rule_sky_wildcards_kite", "State": "FAILED", "ReqMem": "200M"}])
+    text = slurm_run.explain_failure("SLURM run ID: 0123-abcd\n", tmp_path)
+    assert "job 98, rule sky (kite): OUT_OF_MEMORY" in text, text
+    assert "--set-resources sky:mem_mb=" in text and str(log) in text
+    assert "Resume with the same command" in text and "--rerun-incomplete" in text
+
+
 needs_slurm = pytest.mark.skipif(
     shutil.which("sbatch") is None,
     reason="no SLURM on this machine (sbatch not on the PATH); `make cluster-setup` installs it, "

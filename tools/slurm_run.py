@@ -180,6 +180,15 @@ def failed_jobs(run_id: str) -> list[dict]:
     return failed
 
 
+def _killed_for_memory(log: Path) -> bool:
+    """slurmstepd's words in a job's log for a memory kill (cgroup OOM killer or the accounting poller)."""
+    try:
+        text = log.read_text(errors="replace")
+    except OSError:
+        return False
+    return "oom-kill event" in text or "exceeded memory limit" in text or "Exceeded job memory limit" in text
+
+
 def explain_failure(output: str, workdir: Path) -> str:
     """What went wrong, per failed SLURM job of this run, and how to resume."""
     lines = []
@@ -195,11 +204,13 @@ def explain_failure(output: str, workdir: Path) -> str:
     for job in failed:
         cm = re.match(r"rule_(\w+?)(?:_wildcards_(.*))?$", job.get("Comment", ""))
         rule = cm.group(1) if cm else "?"
-        what = ADVICE.get(job["State"], "see its log").format(rule=rule, reqmem=job.get("ReqMem", "?"),
-                                                              timelimit=job.get("Timelimit", "?"))
         pattern = f"rule_{rule}/**/{job['JobID']}.log" if cm else f"**/{job['JobID']}.log"
         logs = sorted((workdir / ".snakemake" / "slurm_logs").glob(pattern))
+        if job["State"] in ("FAILED", "CANCELLED") and logs and _killed_for_memory(logs[0]):
+            job["State"] = "OUT_OF_MEMORY"  # killed by SLURM's memory poller (no cgroup limits on that cluster)
         where = f" Log: {logs[0]}" if logs else ""
+        what = ADVICE.get(job["State"], "see its log").format(rule=rule, reqmem=job.get("ReqMem", "?"),
+                                                              timelimit=job.get("Timelimit", "?"))
         wild = f" ({cm.group(2)})" if cm and cm.group(2) else ""
         lines.append(f"  job {job['JobID']}, rule {rule}{wild}: {job['State']} - {what}.{where}")
     lines.append(
