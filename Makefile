@@ -3,7 +3,7 @@ VENV ?= .venv
 CORES ?= 2
 CONFIG ?= config/config.yaml
 
-.PHONY: setup run smoke test bench clean
+.PHONY: setup run smoke test bench clean cluster-setup cluster-smoke
 
 setup:
 	@bash tools/setup.sh
@@ -14,11 +14,24 @@ run: setup
 smoke: setup
 	$(VENV)/bin/snakemake --cores $(CORES) --configfile config/smoke.yaml --directory results/smoke
 
-test: setup
-	$(VENV)/bin/python -m pytest -q
+test: setup  # without the SLURM tests (minutes each; docs/cluster.md): `pytest -m cluster` runs them
+	$(VENV)/bin/python -m pytest -q -m "not cluster"
 
 bench: setup
 	@for b in benchmarks/*.py; do echo "== $$b"; $(VENV)/bin/python $$b || exit 1; done
+
+# SLURM (docs/cluster.md). cluster-setup: the Snakemake SLURM executor (pyproject extra `cluster`), all a
+# login node of a real cluster needs. cluster-smoke: also a one-node SLURM on this machine (tools/slurm-local.sh
+# installs Debian's slurm-wlm, slurmdbd, mariadb-server, munge with apt-get; root), the smoke workflow through
+# the profile, checked against a local run.
+cluster-setup: setup
+	@$(VENV)/bin/python -c 'import importlib.metadata as m, sys; v = m.version("snakemake-executor-plugin-slurm"); \
+	  sys.exit(not (2, 8) <= tuple(map(int, v.split(".")[:2])) < (3, 0))' 2>/dev/null \
+	  || { echo "natscene setup: installing the SLURM executor plugin (extra 'cluster')"; \
+	       $(VENV)/bin/python -m pip install -q -e ".[test,cluster]"; }
+
+cluster-smoke: cluster-setup
+	$(VENV)/bin/python tools/cluster_smoke.py
 
 clean:
 	rm -rf results .snakemake
