@@ -4,8 +4,9 @@ import numpy as np
 import pytest
 
 from natscene.io import InputError
-from natscene.volume import grid, noise
+from natscene.volume import grid, measure, noise, procedural
 from natscene.volume.build import build_volume
+from natscene.volume.metaballs import generate_smooth
 from natscene.volume.procedural import generate, statistics
 
 
@@ -70,19 +71,75 @@ def test_constant_grid_gives_analytic_transmittance(tmp_path):
         assert abs(img.mean() / np.exp(-mu * depth) - 1) < 0.01, (mu, img.mean(), np.exp(-mu * depth))
 
 
-def test_deterministic_range_and_fill():
-    a = generate("cumulus", (48, 40, 48), seed=5, blobs=20)
-    b = generate("cumulus", (48, 40, 48), seed=5, blobs=20)
-    c = generate("cumulus", (48, 40, 48), seed=6, blobs=20)
+MAIN_JOB = {"cumulus": ((160, 112, 160), 7), "cumulonimbus": ((194, 122, 194), 3)}   # config/config.yaml
+
+
+@pytest.mark.parametrize("kind, res", [("cumulus", (48, 40, 48)), ("cumulonimbus", (64, 48, 64)),
+                                       ("stratocumulus", (64, 12, 64)), ("cumulus_field", (96, 16, 96))])
+def test_deterministic_range_and_fill_for_every_kind(kind, res):
+    a = generate(kind, res, seed=5)
+    b = generate(kind, res, seed=5, threads=1, chunk=7)       # other thread count and chunking: same bytes
+    c = generate(kind, res, seed=6)
     assert np.array_equal(a, b) and not np.array_equal(a, c)
-    # the paper's 194x122x194, a tall 150x256x150 (also checked below), a flat box with the aspect of
-    # 402x66x402 at half size, and the smoke size
-    for kind, res in [("cumulonimbus", (194, 122, 194)), ("cumulus", (201, 33, 201)), ("cumulus", (40, 32, 40))]:
-        d = generate(kind, res, seed=3, blobs=20 if max(res) < 64 else 40)
-        assert d.dtype == np.float32 and d.shape == res[::-1]
-        assert d.min() >= 0 and d.max() <= 1 and d.max() > 0.5
-        fill = statistics(d)["fill_fraction"]
-        assert 0.05 <= fill <= 0.60, (kind, res, fill)
+    assert a.dtype == np.float32 and a.shape == res[::-1]
+    assert a.min() >= 0 and a.max() == pytest.approx(1.0)
+    fill = statistics(a)["fill_fraction"]
+    assert 0.02 <= fill <= 0.6, (kind, fill)
+    # nothing touches the box faces (the billows are not cut by the box)
+    for face in (a[0], a[-1], a[:, :, 0], a[:, :, -1], a[:, -1]):
+        assert face.max() == 0
+
+
+def test_any_resolution_and_the_paper_sizes():
+    # the paper's 194x122x194, a flat 402x66x402-like box at half size, a tall box and a 1-voxel-thin slab
+    for kind, res in [("cumulus_field", (201, 33, 201)), ("cumulonimbus", (75, 128, 75))]:
+        d = generate(kind, res, seed=3)
+        assert d.shape == res[::-1] and d.max() > 0.5
+    with pytest.raises(ValueError, match="1..1024"):
+        generate("cumulus", (1025, 8, 8))
+
+
+@pytest.mark.parametrize("kind", ["cumulus", "cumulonimbus"])
+def test_silhouette_boundary_is_fractal_at_main_job_resolution(kind):
+    # box-counting dimension (2..64 px) of the optical depth > 1 silhouette, front view, main-job settings;
+    # real clouds in photographs: 1.15-1.22; the previous smooth generator: ~1.05
+    res, seed = MAIN_JOB[kind]
+    vol, _ = build_volume({"kind": kind, "resolution": list(res), "seed": seed}, kind)
+    tau = vol.density.sum(axis=0) * vol.voxel_size[2] * vol.extinction_scale
+    assert measure.box_counting_dimension(tau > 1) >= 1.15
+    smooth = generate_smooth(kind, res, seed=seed)
+    col = smooth.sum(axis=0)
+    assert measure.box_counting_dimension(col / col[col > 0].mean() * 60 / max(res) > 1) < 1.12
+
+
+def test_box_counting_dimension_of_known_curves():
+    n = 512
+    yy, xx = np.mgrid[:n, :n]
+    disc = (xx - 256) ** 2 + (yy - 256) ** 2 < 200 ** 2
+    assert measure.box_counting_dimension(disc) == pytest.approx(1.0, abs=0.05)
+    # a Koch-like quadratic island is rougher; a random fill (dust) approaches 2
+    dust = np.random.default_rng(0).uniform(size=(n, n)) < 0.5
+    assert measure.box_counting_dimension(dust) > 1.9
+
+
+def test_density_spectrum_has_energy_in_every_octave():
+    res, octaves = (96, 64, 96), 5
+    p = procedural.shape_params("cumulus", octaves=octaves)
+    freqs = [p.base_frequency * p.lacunarity ** o for o in range(octaves)]
+    full = generate("cumulus", res, seed=2, octaves=octaves)
+    none = generate("cumulus", res, seed=2, octaves=octaves, billow=0.0, erosion=0.0, interior=0.0, warp=0.0)
+    e_full, e_none = measure.band_energy(full, freqs), measure.band_energy(none, freqs)
+    assert np.all(e_full > 2.0 * e_none), (freqs, e_full / e_none)
+    # and dropping the last octave removes energy from its band
+    fewer = generate("cumulus", res, seed=2, octaves=octaves - 1)
+    assert measure.band_energy(fewer, freqs[-1:])[0] < measure.band_energy(full, freqs[-1:])[0]
+
+
+@pytest.mark.parametrize("kind", procedural.KINDS)
+def test_edge_thins_out(kind):
+    res = {"stratocumulus": (96, 16, 96), "cumulus_field": (128, 24, 128)}.get(kind, (96, 72, 96))
+    d = generate(kind, res, seed=4)
+    assert measure.thin_edge_fraction(d) >= 0.15
 
 
 def test_cumulonimbus_is_tall_with_a_wide_anvil():
@@ -94,7 +151,18 @@ def test_cumulonimbus_is_tall_with_a_wide_anvil():
     assert (top - bottom) / d.shape[1] > 0.6          # a tower spanning most of the box height
     mid = width[bottom + (top - bottom) // 2]
     anvil = width[bottom + int(0.8 * (top - bottom)): top + 1].max()
-    assert anvil > 1.5 * mid                          # the anvil spreads wider than the tower
+    assert anvil > 1.3 * mid                          # the anvil spreads wider than the tower
+
+
+def test_volume_is_placed_in_metres():
+    vol, stats = build_volume({"kind": "cumulus", "resolution": [40, 32, 40], "seed": 2}, "t")
+    np.testing.assert_allclose(vol.bbox_min, [-1000, 1500, -1000])
+    np.testing.assert_allclose(vol.bbox_max, [1000, 1500 + 1600, 1000])
+    cb, _ = build_volume({"kind": "cumulonimbus", "resolution": [50, 30, 50], "seed": 2, "altitude": 1000.0}, "t")
+    assert cb.bbox_max[0] - cb.bbox_min[0] == pytest.approx(10000) and cb.bbox_min[1] == 1000
+    # sigma_t keeps its meaning: the same mean optical depth at sigma_t = 1 whatever the size in metres
+    small, _ = build_volume({"kind": "cumulus", "resolution": [40, 32, 40], "seed": 2, "size": 1.0}, "t")
+    assert small.extinction_scale == pytest.approx(vol.extinction_scale * 2000, rel=1e-4)
 
 
 def test_fbm_octaves_show_in_power_spectrum():
@@ -144,7 +212,7 @@ def test_bad_user_grids_are_refused(tmp_path, make, match):
     assert "grid.npy" in str(e.value)
 
 
-def test_user_grid_import_xyz_axes(tmp_path):
+def test_user_grid_import_xyz_axes(tmp_path):  # noqa: D103
     d = np.zeros((6, 5, 4), np.float32)   # x, y, z
     d[5, 0, 0] = 2.0
     np.save(tmp_path / "g.npy", d)

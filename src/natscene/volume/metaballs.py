@@ -169,13 +169,3 @@ def generate_smooth(kind: str, resolution, seed: int = 1, blobs: int = 40, octav
     # the interior is not uniform either: fBm modulates the dense core a little
     density *= np.float32(1.0) - np.float32(0.3 * detail) * (turb + 1)
     return np.clip(density, 0.0, 1.0).astype(np.float32)
-
-
-def statistics(density: np.ndarray) -> dict:
-    """Summary numbers for meta.yaml."""
-    filled = density > 1e-3
-    return {
-        "fill_fraction": float(filled.mean()),
-        "mean_density_in_cloud": float(density[filled].mean()) if filled.any() else 0.0,
-        "max_density": float(density.max()),
-    }

@@ -68,7 +68,7 @@ DEFAULTS = {
     "cumulonimbus": Shape(base_frequency=5.0, billow=1.0, erosion=0.5),
     "stratocumulus": Shape(base_frequency=8.0, billow=0.8, edge=0.45, erosion=0.5, warp=0.35,
                            coverage=0.7, thickness=0.55),
-    "cumulus_field": Shape(blobs=14, base_frequency=14.0),
+    "cumulus_field": Shape(blobs=14, base_frequency=14.0, coverage=0.35),
 }
 
 
