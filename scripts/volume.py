@@ -10,7 +10,6 @@ from natscene.volume.vdb import write_vdb
 def main(snakemake, log):
     name = snakemake.wildcards.volume
     spec = dict(snakemake.params.spec)
-    look = dict(spec.get("preview") or {"width": 256, "spp": 32, "depth": 48})
     log.info(f"volume '{name}': {spec.get('kind')} {spec.get('resolution') if spec.get('kind') != 'file' else spec.get('path')}")
     vol, stats = build_volume(spec, name, snakemake.input[0] if len(snakemake.input) else None,
                               threads=snakemake.threads,
@@ -28,7 +27,7 @@ def main(snakemake, log):
     write_exr(snakemake.output.preview_exr, side_by_side(front, top), ["tau"], stage="volume",
               attrs={"volume": name, "layout": "front (along z) | top (along y), optical depth at sigma_t = 1",
                      "spec": spec})
-    img = rendered_look(vol, int(look["width"]), int(look["spp"]), int(look["depth"]), threads=snakemake.threads)
+    img = rendered_look(vol)
     write_png(snakemake.output.preview_png, preview_sheet(img, front, top), encoded=True)
     write_yaml(snakemake.output.meta, {
         "volume": name, "kind": spec.get("kind"), "resolution": [nx, ny, nz], "units": "m",
