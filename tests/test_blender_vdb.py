@@ -40,4 +40,5 @@ def test_blender_imports_and_renders_density_vdb(tmp_path):
     assert tau.max() > 0
     centre = lum[24:40, 24:40].mean()
     corners = np.mean([lum[:6, :6].mean(), lum[:6, -6:].mean(), lum[-6:, :6].mean(), lum[-6:, -6:].mean()])
-    assert centre > 0.15 and centre > 3 * corners, (centre, corners)
+    assert centre > 0.15 and corners < 0.02, (centre, corners)
+    assert (lum > 0.1).mean() > 0.05                                # a cloud, not a few bright pixels

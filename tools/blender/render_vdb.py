@@ -5,7 +5,7 @@
 natscene's world is y-up metres; Blender's is z-up: the object is rotated +90 degrees about x. The camera looks
 at the object's bounding box from the front (natscene -z = Blender +y side... i.e. from -y in Blender after the
 rotation) with a sun from the side; Principled Volume (density 1 x grid, scaled by 1 / voxel so that a few
-voxels of density 1 are opaque), world colour dark blue. Prints the grid names Blender found.
+voxels of density 1 are opaque), black world (so the sky stays 0), Standard view transform. Prints the grid names Blender found.
 """
 import math
 import sys
@@ -22,6 +22,8 @@ scene = bpy.context.scene
 scene.render.engine = "CYCLES"
 scene.cycles.device = "CPU"
 scene.cycles.samples = 16
+scene.cycles.use_denoising = False
+scene.view_layers[0].cycles.denoising_store_passes = False
 scene.cycles.volume_bounces = 2
 scene.render.resolution_x = size
 scene.render.resolution_y = size
@@ -59,7 +61,8 @@ vol.materials.append(mat)
 
 world = bpy.data.worlds.new("sky")
 world.use_nodes = True
-world.node_tree.nodes["Background"].inputs["Color"].default_value = (0.02, 0.04, 0.1, 1)
+world.node_tree.nodes["Background"].inputs["Color"].default_value = (0.0, 0.0, 0.0, 1)
+scene.view_settings.view_transform = "Standard"
 scene.world = world
 
 sun = bpy.data.objects.new("sun", bpy.data.lights.new("sun", type="SUN"))
