@@ -251,9 +251,9 @@ def _kernel(out, z0, nx, ny, nz, vox, sd, cvox, pw, wf, wx, wy, wz, freq, amp, o
                         rho *= b * b * (3.0 - 2.0 * b)
                 # window: zero at the box faces (the last `window` of each side)
                 wmin = min(min(x, nx * vox - x), min(min(y, ny * vox - y), min(z, nz * vox - z)))
-                if wmin < window:
-                    a = wmin / window
-                    rho *= a * a * (3.0 - 2.0 * a)
+                if wmin < window + vox:
+                    a = (wmin - vox) / window                   # the outermost voxel layer is empty
+                    rho = 0.0 if a <= 0.0 else rho * a * a * (3.0 - 2.0 * a)
                 out[kz, j, i] = min(rho, 1.0)
 
 
