@@ -7,10 +7,10 @@ transform unless ``size``/``altitude`` are given.
 
 ``extinction_scale`` (mu_t [1/m] = sigma_t * rho * extinction_scale) is fixed per volume so that sigma_t in
 [0, 1] spans thin to opaque clouds and means the same for every volume, whatever its size in metres: unless the
-config gives it, it is chosen so that at sigma_t = 1 the mean optical depth through the cloud along z (a
-horizontal line of sight, over the rays that hit it) equals ``reference_optical_depth`` (default 60; sigma_t =
-0.02 then gives a mean optical depth ~1). For a 2 km cumulus this is ~0.1 /m at rho = 1 and sigma_t = 1 (real
-cumulus: 0.02-0.15 /m).
+config gives it, it is chosen so that at sigma_t = 1 the mean optical depth through the cloud along
+``reference_axis`` (default z, a horizontal line of sight; y, vertical, for a deck seen from above), over the
+rays that hit it, equals ``reference_optical_depth`` (default 60; sigma_t = 0.02 then gives a mean optical
+depth ~1). For a 2 km cumulus this is ~0.2 /m at rho = 1 and sigma_t = 1 (real cumulus: 0.02-0.15 /m).
 """
 from __future__ import annotations
 
@@ -21,7 +21,8 @@ from natscene.volume.grid import Volume, import_grid, mean_optical_depth, placem
 from natscene.volume.procedural import KINDS, generate, statistics
 
 PROCEDURAL_KEYS = ("blobs", "octaves", "lacunarity", "gain", "base_frequency", "billow", "warp", "edge",
-                   "erosion", "interior", "coverage", "thickness")
+                   "erosion", "interior", "streak", "coverage", "thickness", "cells", "relief", "heap_min", "heap_max")
+AXES = {"z": 0, "y": 1}                                   # reference_axis -> grid axis of [z, y, x]
 DEFAULT_SIZE_M = {"cumulus": 2000.0, "cumulonimbus": 10000.0, "stratocumulus": 6000.0,
                   "cumulus_field": 12000.0, "file": None}
 DEFAULT_ALTITUDE_M = 1500.0
@@ -59,9 +60,12 @@ def build_volume(spec: dict, name: str = "volume", grid_path: str | None = None,
         lo, hi = lo + np.array([0.0, alt, 0.0]), hi + np.array([0.0, alt, 0.0])
     voxel = float((hi - lo)[2] / nz)
     scale = spec.get("extinction_scale")
-    tau = mean_optical_depth(density, voxel, axis=0)
+    axis = spec.get("reference_axis", "z")
+    if axis not in AXES:
+        raise InputError(f"config key 'volumes.{name}.reference_axis': {axis!r} is not one of z, y")
+    tau = mean_optical_depth(density, voxel, axis=AXES[axis])
     if scale is None:
         scale = float(spec.get("reference_optical_depth", 60.0)) / tau
     stats = statistics(density)
-    stats["mean_optical_depth_z_at_sigma1"] = float(tau * scale)
+    stats[f"mean_optical_depth_{axis}_at_sigma1"] = float(tau * scale)
     return Volume(density, np.asarray(lo, np.float64), np.asarray(hi, np.float64), float(scale)), stats

@@ -5,6 +5,7 @@
   counting): the boundary pixels of a binary mask (inside pixels with a 4-neighbour outside) are covered with
   boxes of side s = 2, 4, ..., 64 px; ``D = -slope`` of the least-squares line through (log s, log N(s)). A
   smooth curve gives 1, a plane-filling one 2.
+- Speck fraction: the share of cloud voxels in tiny isolated components (salt-and-pepper speckle).
 - Band energy: the radial power spectrum of a 3-D field (:func:`natscene.volume.noise.radial_energy_spectrum`)
   summed over the octave band [f / sqrt(2), f * sqrt(2)) around a frequency f (cycles per longest side).
 """
@@ -53,3 +54,30 @@ def thin_edge_fraction(density: np.ndarray, below: float = 0.2) -> float:
     """Share of the cloud's voxels (rho > 0) that are thin: 0 < rho < ``below``."""
     cloud = density > 0
     return float(((density > 0) & (density < below)).sum() / max(int(cloud.sum()), 1))
+
+
+def speck_fraction(density: np.ndarray, level: float = 0.05, min_voxels: int = 27) -> float:
+    """Share of the cloud's voxels (rho > ``level``) that lie in isolated specks: 26-connected components of
+    fewer than ``min_voxels`` voxels (a 3x3x3 block), the salt-and-pepper of noise sampled finer than the grid
+    holds. Coherent wisps are connected to the cloud or are larger; a clean cloud gives 0."""
+    from scipy import ndimage
+
+    m = np.asarray(density) > level
+    total = int(m.sum())
+    if total == 0:
+        return 0.0
+    lab, n = ndimage.label(m, structure=np.ones((3, 3, 3), bool))
+    sizes = np.bincount(lab.ravel())[1:]
+    return float(sizes[sizes < min_voxels].sum() / total)
+
+
+def islands(mask: np.ndarray, max_pixels: int = 4) -> int:
+    """Number of isolated islands of a 2-D silhouette (8-connected components) of at most ``max_pixels``
+    pixels: specks floating beside the cloud in a projection."""
+    from scipy import ndimage
+
+    lab, n = ndimage.label(np.asarray(mask, bool), structure=np.ones((3, 3), bool))
+    if n == 0:
+        return 0
+    sizes = np.bincount(lab.ravel())[1:]
+    return int((sizes <= max_pixels).sum())

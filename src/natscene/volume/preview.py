@@ -108,21 +108,30 @@ def tau_map(tau: np.ndarray, scale: float = 20.0) -> np.ndarray:
     return np.repeat(v[..., None], 3, axis=-1).astype(np.float32)
 
 
+def _resize_nearest(m: np.ndarray, h: int, w: int) -> np.ndarray:
+    rows = np.clip((np.arange(h) * m.shape[0] / h).astype(int), 0, m.shape[0] - 1)
+    cols = np.clip((np.arange(w) * m.shape[1] / w).astype(int), 0, m.shape[1] - 1)
+    return m[rows][:, cols]
+
+
 def preview_sheet(look: np.ndarray, front: np.ndarray, top: np.ndarray, gap: int = 4) -> np.ndarray:
     """One display-referred RGB image in [0, 1]: rendered look (tone-mapped) | tau front | tau top, the maps
-    scaled to the look's height."""
+    scaled to the look's height. A flat box (a deck, a field: the look over 2.5 times wider than tall) is
+    stacked instead: the look over tau front over tau top, all at the look's width, so the top view, which
+    shows the cloud cover, is not shrunk to a strip."""
     from natscene.io import to_srgb8
     look8 = to_srgb8(look, "auto").astype(np.float32) / 255.0
-    h = look8.shape[0]
+    h, w = look8.shape[:2]
+    maps = [tau_map(t) for t in (front, top)]
+    if w > 2.5 * h:
+        parts = [look8]
+        for m in maps:
+            parts.append(np.ones((gap, w, 3), np.float32))
+            parts.append(_resize_nearest(m, max(1, int(round(m.shape[0] * w / m.shape[1]))), w))
+        return np.concatenate(parts, axis=0)
     parts = [look8]
-    for t in (front, top):
-        m = tau_map(t)
-        k = h / m.shape[0]
-        rows = np.clip((np.arange(h) / k).astype(int), 0, m.shape[0] - 1)
-        w = max(1, int(round(m.shape[1] * k)))
-        cols = np.clip((np.arange(w) / k).astype(int), 0, m.shape[1] - 1)
-        m = m[rows][:, cols]
+    for m in maps:
         # tau maps are linear coverage, shown as is (display-referred)
         parts.append(np.ones((h, gap, 3), np.float32))
-        parts.append(m)
+        parts.append(_resize_nearest(m, h, max(1, int(round(m.shape[1] * h / m.shape[0])))))
     return np.concatenate(parts, axis=1)

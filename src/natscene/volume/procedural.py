@@ -36,13 +36,15 @@ import numba as nb
 import numpy as np
 from scipy import ndimage
 
-from natscene.volume import metaballs
+from natscene.volume import shapes
 from natscene.volume.noise import perlin_tile, perlin_worley_tile, worley_fbm_tile
 
 KINDS = ("cumulus", "cumulonimbus", "stratocumulus", "cumulus_field")
 COARSE_MAX = 128        # longest side of the coarse shape grid
 TILE = 64               # texels per side of the periodic noise tiles
 TILE_CELLS = 4          # noise cells per tile side
+MAX_OCTAVES = 10        # the schema's maximum
+LAM_FULL, LAM_OFF = 6.0, 3.0   # band limit: octaves of wavelength >= LAM_FULL voxels whole, <= LAM_OFF gone
 
 
 @dataclass(frozen=True)
@@ -59,16 +61,21 @@ class Shape:
     edge: float = 0.45              # density ramp width, in base wavelengths
     erosion: float = 0.6            # strength of the high-frequency edge erosion
     interior: float = 0.35          # low-frequency density variation inside
+    streak: float = 2.0             # erosion noise stretched along the wind (x) by this factor: streaky wisps
     coverage: float = 0.6           # stratocumulus / cumulus_field: fraction of the sky covered
     thickness: float = 0.5          # stratocumulus: mean layer thickness, fraction of the box height
+    cells: float = 6.0              # stratocumulus: convective cells across the longest side
+    relief: float = 1.0             # stratocumulus: thickness variation of the cells (0: flat top)
+    heap_min: float = 0.025         # cumulus_field: smallest heap diameter, fraction of the longest side
+    heap_max: float = 0.2           # cumulus_field: largest heap diameter
 
 
 DEFAULTS = {
-    "cumulus": Shape(billow=1.1, erosion=0.5),
-    "cumulonimbus": Shape(base_frequency=5.0, billow=1.0, erosion=0.5),
+    "cumulus": Shape(billow=1.1, gain=0.8, erosion=0.4, streak=1.5),
+    "cumulonimbus": Shape(base_frequency=5.0, billow=0.85, gain=0.8, erosion=0.5, streak=1.0),
     "stratocumulus": Shape(base_frequency=8.0, billow=0.8, edge=0.45, erosion=0.5, warp=0.35,
                            coverage=0.7, thickness=0.55),
-    "cumulus_field": Shape(blobs=14, base_frequency=14.0, coverage=0.35),
+    "cumulus_field": Shape(blobs=8, base_frequency=14.0, coverage=0.6, streak=1.5),
 }
 
 
@@ -81,12 +88,6 @@ def shape_params(kind: str, **overrides) -> Shape:
     return Shape(**{**base.__dict__, **kw})
 
 
-def _smoothstep(e0, e1, x):
-    t = np.clip((x - e0) / (e1 - e0), 0.0, 1.0)
-    return t * t * (3 - 2 * t)
-
-
-# ------------------------------------------------------------------------------------------- coarse shapes
 def _coarse_grid(res, ext):
     """Coarse grid shape (nz, ny, nx) and its voxel size (box units) for a fine grid ``res`` = (nx, ny, nz)."""
     k = max(1, int(np.ceil(max(res) / COARSE_MAX)))
@@ -94,67 +95,21 @@ def _coarse_grid(res, ext):
     return (cn[2], cn[1], cn[0]), ext / np.array(cn, np.float64)
 
 
-def _field_blobs(rng, ext, p: Shape, margin: float):
-    """Metaball heaps of a cumulus field: heaps of random size placed by dart throwing (no two overlapping),
-    all with the same flat base (the condensation level), until ``coverage`` of the box floor is reached."""
-    ex, ey, ez = ext
-    area, covered, blobs, placed = ex * ez, 0.0, [], []
-    base_y = margin + 0.06 * ey
-    for _ in range(4000):
-        if covered >= p.coverage * area:
-            break
-        w = min(ex, ez) * rng.uniform(0.07, 0.2)                   # heap diameter
-        h = min(ey - base_y - margin, w * rng.uniform(0.45, 0.9))   # heap height (humilis .. mediocris)
-        cx, cz = rng.uniform(margin + w / 2, ex - margin - w / 2), rng.uniform(margin + w / 2, ez - margin - w / 2)
-        if any((cx - x) ** 2 + (cz - z) ** 2 < (0.5 * (w + v)) ** 2 * 0.8 for x, z, v in placed):
-            continue
-        placed.append((cx, cz, w))
-        covered += np.pi * (w / 2) ** 2
-        sub = np.array([w, h, w])
-        for c, radii, wgt in metaballs.cumulus_blobs(rng, sub, max(4, p.blobs // 2)):
-            blobs.append((c + np.array([cx - w / 2, base_y - 0.22 * h * 0.0, cz - w / 2]), radii, wgt))
-    return blobs
-
-
-def coarse_occupancy(kind: str, res, ext, p: Shape, rng, margin: float) -> tuple[np.ndarray, np.ndarray, float]:
-    """Inside/outside of the coarse body on the coarse grid: (bool (nz, ny, nx), coarse voxel size, base y).
+def coarse_shape(kind: str, res, ext, p: Shape, rng, margin: float) -> tuple[shapes.Coarse, np.ndarray]:
+    """The kind's coarse body (:mod:`natscene.volume.shapes`) on the coarse grid, and the coarse voxel size.
 
     ``margin`` (box units) is kept free along every face so the displaced billows are not cut by the box."""
     cshape, cvox = _coarse_grid(res, ext)
-    inner = ext - 2 * margin
-    if kind in ("cumulus", "cumulonimbus"):
-        make = metaballs.cumulus_blobs if kind == "cumulus" else metaballs.cumulonimbus_blobs
-        blobs = [(c + margin, r, w) for c, r, w in make(rng, inner, p.blobs)]
+    if kind == "cumulus":
+        body = shapes.cumulus(rng, cshape, cvox, ext, margin, p.blobs)
+    elif kind == "cumulonimbus":
+        body = shapes.cumulonimbus(rng, cshape, cvox, ext, margin, p.blobs)
     elif kind == "cumulus_field":
-        blobs = _field_blobs(rng, ext, p, margin)
+        body = shapes.field(rng, cshape, cvox, ext, margin, p.blobs, p.coverage, p.heap_min, p.heap_max)
     else:
-        blobs = None
-    if blobs is not None:
-        field = metaballs.metaball_field(cshape, ext, blobs)
-        occ = field > metaballs.THRESHOLD
-        base_y = min(c[1] - 0.5 * r[1] for c, r, _ in blobs)
-        base_y = max(base_y, margin)
-        return occ, cvox, float(base_y)
-    # stratocumulus: a layer between a flat-ish base and an undulating top, broken into cells where a
-    # low-frequency cellular field is below the coverage quantile
-    cnz, cny, cnx = cshape
-    f2 = perlin_worley_tile(TILE, TILE_CELLS, rng)[TILE // 2]            # a 2-D slice: cellular, billowy
-    zz = (np.arange(cnz) + 0.5) * cvox[2]
-    xx = (np.arange(cnx) + 0.5) * cvox[0]
-    cell_freq = p.base_frequency / 4.0                                   # cells across the box
-    u = (xx * cell_freq / TILE_CELLS * TILE) % TILE
-    v = (zz * cell_freq / TILE_CELLS * TILE) % TILE
-    cov = ndimage.map_coordinates(f2, np.meshgrid(v, u, indexing="ij"), order=1, mode="grid-wrap")
-    thresh = np.quantile(cov, 1 - p.coverage) if p.coverage < 1 else -np.inf
-    yy = (np.arange(cny) + 0.5) * cvox[1]
-    base_y = margin + 0.15 * (ext[1] - 2 * margin)
-    thick = p.thickness * (ext[1] - 2 * margin)
-    # thicker where the cell field is high (cells dome up in their middles)
-    dome = np.clip((cov - thresh) / max(float(cov.max() - thresh), 1e-6), 0, 1) if np.isfinite(thresh) \
-        else (cov - cov.min()) / max(float(np.ptp(cov)), 1e-6)
-    top = base_y + thick * (0.55 + 0.6 * dome)
-    occ = (yy[None, :, None] >= base_y) & (yy[None, :, None] <= top[:, None, :]) & (cov[:, None, :] > thresh)
-    return occ, cvox, float(base_y)
+        body = shapes.stratocumulus(rng, cshape, cvox, ext, margin, p.coverage, p.thickness, p.cells,
+                                    p.base_frequency, p.edge / p.base_frequency, p.relief)
+    return body, cvox
 
 
 def signed_distance(occ: np.ndarray, cvox: np.ndarray) -> np.ndarray:
@@ -164,6 +119,23 @@ def signed_distance(occ: np.ndarray, cvox: np.ndarray) -> np.ndarray:
     outside = ndimage.distance_transform_edt(~occ, sampling=sampling)
     sd = np.where(occ, inside - 0.5 * cvox.min(), -(outside - 0.5 * cvox.min()))
     return ndimage.gaussian_filter(sd, 0.7, mode="nearest").astype(np.float32)
+
+
+def extend_factors(occ: np.ndarray, cvox: np.ndarray, grids) -> list[np.ndarray]:
+    """The per-voxel factors of a coarse body, defined on the body, carried outside: every voxel takes the
+    value of the nearest body voxel (the feature transform of the exact Euclidean distance transform), so the
+    displacement that grows a billow out of a surface is the one of that surface, however far it reaches;
+    then lightly smoothed so the factors do not jump between surfaces."""
+    idx = ndimage.distance_transform_edt(~occ, sampling=tuple(cvox[::-1]), return_distances=False,
+                                         return_indices=True)
+    out = []
+    for g in grids:
+        g = np.asarray(g, np.float32)
+        if np.all(g == g.flat[0]):
+            out.append(np.ascontiguousarray(g))
+            continue
+        out.append(np.ascontiguousarray(ndimage.gaussian_filter(g[idx[0], idx[1], idx[2]], 1.0), np.float32))
+    return out
 
 
 # ---------------------------------------------------------------------------------------- fine-grid kernel
@@ -202,8 +174,9 @@ def _coarse(sd, x, y, z):
 
 
 @nb.njit(parallel=True, cache=True, fastmath=True)
-def _kernel(out, z0, nx, ny, nz, vox, sd, cvox, pw, wf, wx, wy, wz, freq, amp, off, fw, warp, f_er, off_er,
-         f_in, off_in, edge, erosion, interior, base_y, base_soft, height, flat_base, window, reach):
+def _kernel(out, z0, nx, ny, nz, vox, sd, ampg, edgeg, erog, cvox, pw, wf, wx, wy, wz, freq, amp, off, fw, warp, f_er,
+            off_er, streak, f_in, off_in, edge, erosion, interior, base_y, base_soft, ceiling, ceil_soft, height,
+            window, reach):
     tscale = pw.shape[0] / 4.0                                     # texels per noise cycle (TILE_CELLS)
     nzc = out.shape[0]
     no = freq.shape[0]
@@ -213,42 +186,52 @@ def _kernel(out, z0, nx, ny, nz, vox, sd, cvox, pw, wf, wx, wy, wz, freq, amp, o
             y = (j + 0.5) * vox
             for i in range(nx):
                 x = (i + 0.5) * vox
-                d = _coarse(sd, x / cvox[0], y / cvox[1], z / cvox[2])
+                cx, cy, cz = x / cvox[0], y / cvox[1], z / cvox[2]
+                d = _coarse(sd, cx, cy, cz)
                 if d < -reach:
                     out[kz, j, i] = 0.0
                     continue
+                a_loc = _coarse(ampg, cx, cy, cz)
                 # domain warp (low-frequency vector noise, in [-1, 1] per axis)
                 tw = fw * wx.shape[0] / 4.0
                 qx = x + warp * _tex(wx, x * tw, y * tw, z * tw)
                 qy = y + warp * _tex(wy, x * tw + 17.3, y * tw + 5.1, z * tw)
                 qz = z + warp * _tex(wz, x * tw, y * tw + 11.7, z * tw + 3.9)
-                # pyroclastic displacement by Perlin-Worley fBm
-                h = d
+                # pyroclastic displacement by a band-limited Perlin-Worley fBm
+                h = 0.0
                 for o in range(no):
+                    if amp[o] == 0.0:
+                        continue
                     s = freq[o] * tscale
                     h += amp[o] * (_tex(pw, qx * s + off[o, 0], qy * s + off[o, 1], qz * s + off[o, 2]) - 0.5)
+                h = d + a_loc * h
                 if h <= 0.0:
                     out[kz, j, i] = 0.0
                     continue
-                t = h / edge
+                t = h / (edge * _coarse(edgeg, cx, cy, cz))
                 ramp = 1.0 if t >= 1.0 else t * t
-                # Nubis erosion: wispy (e) at the bottom, billowy (1 - e) at the top
+                # Nubis erosion, streaked along the wind (x): wispy (e) at the bottom, billowy (1 - e) at the top
                 s = f_er * tscale
-                e = _tex(wf, qx * s + off_er[0], qy * s + off_er[1], qz * s + off_er[2])
+                e = _tex(wf, qx * s / streak + off_er[0], qy * s + off_er[1], qz * s + off_er[2])
                 hb = min(max(y / height, 0.0), 1.0)
-                er = erosion * (e * (1.0 - hb) + (1.0 - e) * hb)
+                er = erosion * _coarse(erog, cx, cy, cz) * (e * (1.0 - hb) + (1.0 - e) * hb)
                 rho = (ramp - er) / (1.0 - er)
                 if rho <= 0.0:
                     out[kz, j, i] = 0.0
                     continue
                 s = f_in * tscale
                 rho *= 1.0 - interior + interior * _tex(pw, x * s + off_in[0], y * s + off_in[1], z * s + off_in[2])
-                if flat_base:
-                    b = (y - base_y) / base_soft
-                    if b <= 0.0:
-                        rho = 0.0
-                    elif b < 1.0:
-                        rho *= b * b * (3.0 - 2.0 * b)
+                # flat base (the condensation level), soft over a few voxels
+                b = (y - base_y) / base_soft
+                if b <= 0.0:
+                    rho = 0.0
+                elif b < 1.0:
+                    rho *= b * b * (3.0 - 2.0 * b)
+                # ceiling (an anvil's flat top at the tropopause): only where the displacement is damped (a_loc < 1)
+                if y > ceiling - ceil_soft:
+                    c = min((y - ceiling + ceil_soft) / (2.0 * ceil_soft), 1.0)
+                    keep = min(max((a_loc - 0.6) / 0.4, 0.0), 1.0)
+                    rho *= keep + (1.0 - keep) * (1.0 - c * c * (3.0 - 2.0 * c))
                 # window: zero at the box faces (the last `window` of each side)
                 wmin = min(min(x, nx * vox - x), min(min(y, ny * vox - y), min(z, nz * vox - z)))
                 if wmin < window + vox:
@@ -256,6 +239,14 @@ def _kernel(out, z0, nx, ny, nz, vox, sd, cvox, pw, wf, wx, wy, wz, freq, amp, o
                     rho = 0.0 if a <= 0.0 else rho * a * a * (3.0 - 2.0 * a)
                 out[kz, j, i] = min(rho, 1.0)
 
+
+def octave_weights(freq: np.ndarray, max_res: int) -> np.ndarray:
+    """Band limit of the displacement fBm: octave ``f`` (cycles per longest side) has a wavelength of
+    ``max_res / f`` voxels; it is kept whole above 6 voxels, faded out by a smoothstep to 0 at 3 voxels (and
+    beyond): the grid cannot hold it, and sampled anyway it turns into per-voxel noise (isolated specks)."""
+    lam = max_res / np.asarray(freq, np.float64)
+    t = np.clip((lam - LAM_OFF) / (LAM_FULL - LAM_OFF), 0.0, 1.0)
+    return t * t * (3 - 2 * t)
 
 
 def generate(kind: str, resolution, seed: int = 1, chunk: int = 64, threads: int | None = None,
@@ -270,44 +261,73 @@ def generate(kind: str, resolution, seed: int = 1, chunk: int = 64, threads: int
     nx, ny, nz = (int(v) for v in resolution)
     if min(nx, ny, nz) < 1 or max(nx, ny, nz) > 1024:
         raise ValueError(f"resolution {resolution} must be 3 integers in 1..1024")
-    ext = np.array([nx, ny, nz], np.float64) / max(nx, ny, nz)
-    vox = 1.0 / max(nx, ny, nz)
+    n_max = max(nx, ny, nz)
+    ext = np.array([nx, ny, nz], np.float64) / n_max
+    vox = 1.0 / n_max
     rng = np.random.default_rng(seed)
     f0 = float(p.base_frequency)
     freq = np.array([f0 * p.lacunarity ** o for o in range(p.octaves)], np.float64)
     amp = np.array([p.billow * p.gain ** o / f0 for o in range(p.octaves)], np.float64)
+    amp *= octave_weights(freq, n_max)
     reach = 0.5 * float(amp.sum()) + 1e-6
     warp = p.warp / f0
-    margin = min(0.45 * reach + 0.3 * warp + 2 * vox, 0.2 * ext.min())
+    margin = min(0.3 * reach + 0.3 * warp + 2 * vox, 0.2 * ext.min())
     if kind == "stratocumulus" or kind == "cumulus_field":
-        margin = min(margin, 0.25 * ext[1])
-    occ, cvox, base_y = coarse_occupancy(kind, (nx, ny, nz), ext, p, rng, margin)
-    if not occ.any():
+        margin = min(margin, 0.12 * ext[1] + 2 * vox)           # a flat box: keep its height for the layer
+    body, cvox = coarse_shape(kind, (nx, ny, nz), ext, p, rng, margin)
+    if not body.occ.any():
         return np.zeros((nz, ny, nx), np.float32)
-    sd = signed_distance(occ, cvox)
+    reach *= max(float(body.amp.max()), 1e-6)
+    sd = signed_distance(body.occ, cvox)
+    factors = extend_factors(body.occ, cvox, (body.amp, body.edge, body.erosion))
     pw = perlin_worley_tile(TILE, TILE_CELLS, rng)
     wf = worley_fbm_tile(TILE, TILE_CELLS, rng)
     wx, wy, wz = (perlin_tile(32, TILE_CELLS, rng) for _ in range(3))
-    off = rng.uniform(0, TILE, (p.octaves, 3))
+    off = rng.uniform(0, TILE, (MAX_OCTAVES, 3))[: p.octaves]   # same stream whatever the octave count
     off_er, off_in = rng.uniform(0, TILE, 3), rng.uniform(0, TILE, 3)
-    f_er = float(freq[-1]) * 0.5 if p.octaves > 1 else 2 * f0
+    # erosion noise: half the finest octave's frequency, but no finer than the grid holds (its Worley fBm
+    # carries content up to 4x its frequency: at max_res / 12 that is a 3-voxel wavelength)
+    f_er = min(float(freq[-1]) * 0.5 if p.octaves > 1 else 2 * f0, n_max / 12.0)
     out = np.empty((nz, ny, nx), np.float32)
-    kern = _kernel
     if threads:
         import numba
         numba.set_num_threads(max(1, min(int(threads), numba.config.NUMBA_NUM_THREADS)))
-    flat = kind != "stratocumulus"
-    args = (nx, ny, nz, vox, sd, cvox, pw, wf, wx, wy, wz, freq, amp, off, f0 * 0.5, warp, f_er, off_er,
-            f0 * 0.5, off_in, p.edge / f0, float(p.erosion), float(p.interior), base_y, 3 * vox,
-            float(ext[1]), flat, 2.5 * vox, reach)
+    args = (nx, ny, nz, vox, sd, *factors, cvox, pw, wf, wx, wy, wz, freq, amp, off, f0 * 0.5, warp,
+            f_er, off_er, float(p.streak), f0 * 0.5, off_in, p.edge / f0, float(p.erosion), float(p.interior),
+            body.base_y, 3 * vox, body.ceiling, max(3 * vox, 0.02 * ext[1]), float(ext[1]), 2.5 * vox, reach)
     for z0 in range(0, nz, chunk):
-        kern(out[z0:z0 + chunk], z0, *args)
+        _kernel(out[z0:z0 + chunk], z0, *args)
         if progress:
             progress(min(z0 + chunk, nz), nz)
     m = float(out.max())
     if m > 0:
         out /= np.float32(m)
+    despeckle(out)
     return out
+
+
+def despeckle(density: np.ndarray, level: float = 0.05, min_voxels: int = 27, halo: float = 0.01) -> np.ndarray:
+    """Remove isolated specks in place (as production tools delete small islands of a VDB by connectivity):
+    the visible specks, 26-connected components of ``density > level`` with fewer than ``min_voxels`` voxels
+    (a 3x3x3 block), are set to 0, and so is every component of ``density > halo`` left without a visible
+    body (a speck's faint halo, or a faint fleck on its own). With the band-limited noise they are a few per
+    thousand of the cloud's voxels; what stays (connected to the cloud, or larger) are the coherent wisps."""
+    cube = np.ones((3, 3, 3), bool)
+    visible = density > level
+    lab, n = ndimage.label(visible, structure=cube)
+    if n == 0:
+        return density
+    sizes = np.bincount(lab.ravel())
+    small = sizes < min_voxels
+    small[0] = False
+    speck = small[lab]
+    body = visible & ~speck
+    density[speck] = 0.0
+    lab, n = ndimage.label(density > halo, structure=cube)
+    has_body = np.bincount(lab[body], minlength=n + 1) > 0
+    has_body[0] = True
+    density[~has_body[lab]] = 0.0
+    return density
 
 
 def statistics(density: np.ndarray) -> dict:
