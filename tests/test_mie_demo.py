@@ -31,8 +31,9 @@ def _render(vol, cam, pair):
 
 # the demo deck in small: a broken stratocumulus volume 800 m wide at the box floor, its extinction scale set
 # for a mean vertical optical depth of 3 at the solver's sigma_t = 0.3 (reference_axis y), as in the configs
-DECK = {"kind": "stratocumulus", "resolution": [96, 20, 96], "size": 800.0, "altitude": 0.0, "coverage": 0.9,
-        "thickness": 0.7, "cells": 3, "seed": 2, "reference_axis": "y", "reference_optical_depth": 10.0}
+DECK = {"kind": "stratocumulus", "resolution": [96, 20, 96], "size": 800.0, "altitude": 0.0, "coverage": 0.95,
+        "thickness": 0.7, "cells": 3, "relief": 0.35, "billow": 0.5, "erosion": 0.3, "interior": 0.2, "seed": 2,
+        "reference_axis": "y", "reference_optical_depth": 10.0}
 
 
 def _deck(**kw):
