@@ -4,11 +4,12 @@ The method of production cloud tools, after Schneider's Nubis ("The real-time vo
 Zero Dawn", SIGGRAPH 2015 course; "Nubis: authoring real-time volumetric cloudscapes", 2017) and Wrenninge's
 pyroclastic displacement ("Production Volume Rendering", 2012, §10.5 / Magnus Wrenninge, SIGGRAPH 2011 course):
 
-1. **Coarse shape.** A low-frequency body on a coarse grid (at most ``COARSE_MAX`` voxels per side): metaballs
-   (:mod:`natscene.volume.metaballs`) for ``cumulus`` (a flat-based heap of turrets) and ``cumulonimbus`` (tower,
-   broad base, anvil spreading downwind), many heaps with a common flat base (the lifting condensation level) for
-   ``cumulus_field``, and a layer broken by a low-frequency cellular coverage field for ``stratocumulus``. Its
-   inside is turned into a signed distance d (positive inside, box units; exact Euclidean distance transform).
+1. **Coarse shape.** A low-frequency body on a coarse grid (at most ``COARSE_MAX`` voxels per side,
+   :mod:`natscene.volume.shapes`): a heap of turreted towers for ``cumulus``, tower + flanking line + flat anvil
+   spreading downwind for ``cumulonimbus``, heaps of power-law sizes with one flat base (the lifting
+   condensation level) for ``cumulus_field``, a layer broken into closed cells for ``stratocumulus``, with
+   per-surface factors of the displacement, edge ramp and erosion (:func:`extend_factors`). Its inside is
+   turned into a signed distance d (positive inside, box units; exact Euclidean distance transform).
 2. **Pyroclastic displacement** (Wrenninge): the surface is displaced along the distance field by an fBm of
    Perlin-Worley noise, ``h = d + sum_o A_o (PW(f_o q + s_o) - 1/2)``, ``f_o = base_frequency * lacunarity^o``,
    ``A_o = billow * gain^o / base_frequency``: with ``gain = 1/lacunarity`` every octave is displaced by the

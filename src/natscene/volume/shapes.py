@@ -1,20 +1,23 @@
 """Coarse cloud shapes of the production modeller (:mod:`natscene.volume.procedural`), on a coarse grid.
 
-Each builder returns a :class:`Coarse`: the inside/outside of the low-frequency body, and two per-voxel factors
+Each builder returns a :class:`Coarse`: the inside/outside of the low-frequency body, and three per-voxel factors
 the fine kernel reads, ``amp`` (scales the pyroclastic displacement: billowy turrets 1, a smooth anvil less, a
-small heap of a field in proportion to its size) and ``edge`` (scales the width of the density ramp), plus
-the height of the flat base. All lengths are box units (the longest side of the box is 1), arrays are
+small heap of a field in proportion to its size, a thin deck in proportion to its depth), ``edge`` (scales the
+width of the density ramp) and ``erosion`` (scales the edge erosion), plus the height of the flat base and,
+for an anvil, a ceiling. All lengths are box units (the longest side of the box is 1), arrays are
 ``[z, y, x]`` on the coarse grid of voxel size ``cvox`` (x, y, z).
 
-- ``cumulus``: a dome on a flat base carrying turrets that carry turrets (:func:`heap_blobs`): a cauliflower.
+- ``cumulus``: a core on a flat base and turrets of several heights rising from it, carrying turrets that carry
+  turrets (:func:`heap_blobs`): a cauliflower heap.
 - ``cumulonimbus``: the classic incus (WMO *International Cloud Atlas*, Cumulonimbus capillatus incus): a
   narrow, slightly leaning cauliflower tower of rising thermal bubbles on a broad flat base, an overshooting
   dome on its top, a flanking line of smaller towers stepping down on the upwind side, and at the top a flat,
   wide anvil (the tropopause) spreading downwind (+x) in a widening fan, thick near the tower and thinning
-  toward its overhanging downwind edge; the anvil is smoother than the tower (``amp`` 0.35).
+  toward its overhanging edges; the anvil is smoother than the tower (``amp`` 0.15 at its top near the tower,
+  up to ~0.8 underneath and at its far edges, where its erosion grows too: ragged, fibrous edges).
 - ``cumulus_field``: fair-weather cumulus (humilis / mediocris) with one flat base (the lifting condensation
   level), the heaps' diameters drawn from the power law N(D) ~ D^-2 observed for cumulus fields (Plank 1969;
-  Benner & Curry 1998) between ``d_min`` and ``d_max``, heights 0.4-0.9 of the diameter, placed without
+  Benner & Curry 1998) between ``d_min`` and ``d_max`` (``heap_min``, ``heap_max``), heights 0.4-0.9 of the diameter, placed without
   overlap until the covered share of the floor reaches ``coverage``; each heap's displacement and edge scale
   with its diameter, so small heaps keep their shape.
 - ``stratocumulus``: a layer broken into closed convective cells (Rayleigh-Benard-like; Agee 1984): a 2-D
