@@ -3,10 +3,14 @@ VENV ?= .venv
 CORES ?= 2
 CONFIG ?= config/config.yaml
 
-.PHONY: setup run smoke test bench clean cluster-setup cluster-smoke
+.PHONY: setup setup-extras run smoke test bench clean cluster-setup cluster-smoke
 
 setup:
 	@bash tools/setup.sh
+
+# optional heavy tools (Blender for the OpenVDB client test)
+setup-extras: setup
+	@bash tools/setup-extras.sh
 
 run: setup
 	$(VENV)/bin/snakemake --cores $(CORES) --configfile $(CONFIG) --printshellcmds

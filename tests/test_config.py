@@ -23,7 +23,8 @@ def test_bundled_configs_are_valid(name):
 def test_defaults_are_filled_inside_referenced_sections(smoke):
     cfg = validate_config(copy.deepcopy(smoke), SCHEMA)
     vol = cfg["volumes"]["tiny"]
-    assert vol["octaves"] == 5 and vol["size"] == 1.0 and vol["extinction_scale"] is None
+    assert vol["grid"] == "density" and vol["reference_optical_depth"] == 60.0 and vol["size"] is None
+    assert vol["extinction_scale"] is None
     assert cfg["views"]["tiny"]["camera"]["up"] == [0, 1, 0]
 
 

@@ -6,12 +6,12 @@ import numpy as np
 import pytest
 
 from natscene.geometry import sun_direction
-from natscene.mie.demo import (angular_profile, deck_camera, rim_peak, ring_contrast, silver_lining_camera,
-                               stratocumulus_deck)
+from natscene.mie.demo import angular_profile, deck_camera, deck_top, rim_peak, ring_contrast, silver_lining_camera
 from natscene.mie.march import render_mie
 from natscene.mie.phase import compute_mie_table, glory_ring_deg, hg_table
 from natscene.mie.points import generate_points, sample_density
 from natscene.mie.solver import solve
+from natscene.volume.build import build_volume
 from helpers import sphere_volume
 
 SUN = sun_direction(130, 35)
@@ -29,29 +29,38 @@ def _render(vol, cam, pair):
     return [render_mie(vol, cam, SUN, sol, tab, PARAMS, sky) for tab, sol in pair]
 
 
-def test_deck_optical_depth_and_shape():
-    # uniform (no relief): the vertical optical depth sigma_e * integral D dy is the requested one everywhere
-    # inside; with relief it varies but keeps that mean
-    for relief in (0.0, 0.3):
-        deck = stratocumulus_deck(size=1.0, resolution=40, thickness=0.1, relief=relief, optical_depth=3.0,
-                                  sigma_t=0.3)
-        tau = deck.density.sum(axis=1) * float(deck.voxel_size[1]) * 0.3 * deck.extinction_scale  # (z, x)
-        inner = tau[3:-3, 3:-3]
-        assert inner.mean() == pytest.approx(3.0, rel=0.03)
-        if relief == 0:
-            assert np.allclose(inner, 3.0, rtol=1e-3)
-        else:
-            assert inner.std() > 0.1 * 3.0
-        assert deck.density[:, 0].max() == 0 and deck.density[:, -1].max() == 0  # empty below and above
-        assert np.allclose(deck.voxel_size, deck.voxel_size[0])              # cubic voxels (the marcher's)
+# the demo deck in small: a broken stratocumulus volume 800 m wide at the box floor, its extinction scale set
+# for a mean vertical optical depth of 3 at the solver's sigma_t = 0.3 (reference_axis y), as in the configs
+DECK = {"kind": "stratocumulus", "resolution": [96, 20, 96], "size": 800.0, "altitude": 0.0, "coverage": 0.95,
+        "thickness": 0.7, "cells": 3, "relief": 0.35, "billow": 0.5, "erosion": 0.3, "interior": 0.2, "seed": 2,
+        "reference_axis": "y", "reference_optical_depth": 10.0}
+
+
+def _deck(**kw):
+    return build_volume({**DECK, **kw}, "deck")[0]
+
+
+def test_deck_is_thin_broken_and_optically_moderate():
+    deck = _deck()
+    tau = deck.density.sum(axis=1) * float(deck.voxel_size[1]) * 0.3 * deck.extinction_scale   # (z, x)
+    assert tau[tau > 0].mean() == pytest.approx(3.0, rel=1e-4)          # mean vertical optical depth 3
+    assert 1.0 < np.median(tau[tau > 0]) < 6.0                           # optically moderate where cloudy
+    assert 0.02 < (tau < 0.3).mean() < 0.5                              # broken: some clear lanes
+    assert tau.std() > 0.2 * tau.mean()                                  # textured, not a uniform slab
+    # thin and wide: a layer a few tenths of its box's height, hundreds of metres, under a km-wide box
+    rows = np.nonzero(deck.density.max(axis=(0, 2)) > 0.05)[0]
+    thick_m = (rows.max() - rows.min() + 1) * float(deck.voxel_size[1])
+    assert 50 < thick_m < 400 and deck.bbox_max[0] - deck.bbox_min[0] == pytest.approx(800.0)
+    assert deck.bbox_min[1] < deck_top(deck) < deck.bbox_max[1]
+    assert np.allclose(deck.voxel_size, deck.voxel_size[0])              # cubic voxels (the marcher's)
 
 
 def test_glory_ring_in_the_full_render_of_a_thin_narrow_droplet_deck():
     table = compute_mie_table(8.0, 0.02, n_radii=40, spectral_nm=())
     ring = 180.0 - glory_ring_deg(table)[1]                              # ≈ 1.9° from the antisolar point
-    deck = stratocumulus_deck(size=0.8, resolution=48, thickness=0.05, relief=0.1, optical_depth=3.0)
+    deck = _deck()
     pair = _pair(deck, table)
-    cam = deck_camera("glory", deck, SUN, distance=0.8, fov=8.0, resolution=(96, 96))
+    cam = deck_camera("glory", deck, SUN, distance=800.0, fov=8.0, resolution=(96, 96))
     mie, hg = _render(deck, cam, pair)
     ang_m, con_m = ring_contrast(*angular_profile(mie, cam, -SUN, 3.5, 0.1))
     ang_h, con_h = ring_contrast(*angular_profile(hg, cam, -SUN, 3.5, 0.1))
@@ -64,8 +73,8 @@ def test_glory_washes_out_with_broad_droplet_spectrum():
     # the same deck with v_eff = 0.1 (cumulus): the ring contrast collapses (Laven 2005)
     narrow = compute_mie_table(8.0, 0.02, n_radii=40, spectral_nm=())
     broad = compute_mie_table(8.0, 0.1, n_radii=40, spectral_nm=())
-    deck = stratocumulus_deck(size=0.8, resolution=48, thickness=0.05, relief=0.1, optical_depth=3.0)
-    cam = deck_camera("glory", deck, SUN, distance=0.8, fov=8.0, resolution=(96, 96))
+    deck = _deck()
+    cam = deck_camera("glory", deck, SUN, distance=800.0, fov=8.0, resolution=(96, 96))
     con = []
     for t in (narrow, broad):
         pts = generate_points(deck, SUN, sigma_t=0.3, spacing_voxels=2.0)

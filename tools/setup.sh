@@ -44,3 +44,12 @@ if ! "$VENV/bin/python" -c 'import sys, natscene.llvm as l; sys.exit(l.find_libl
   as_root apt-get update -qq && as_root apt-get install -y -qq libllvm19
 fi
 "$VENV/bin/python" -W ignore::RuntimeWarning -m natscene.llvm --check
+
+# OpenVDB in and out (density.vdb): the OpenVDB library's own Python binding. Debian's python3-openvdb runs
+# under the system Python (natscene.volume.vdb calls it as a separate program: the binding is built against
+# Debian's NumPy 1.x and cannot load beside the venv's NumPy 2). Skipped when a binding is already usable.
+if ! "$VENV/bin/python" -c 'import natscene.volume.vdb as v; v.backend()' >/dev/null 2>&1; then
+  echo "natscene setup: installing Debian's python3-openvdb (OpenVDB 10) with apt-get"
+  as_root apt-get update -qq && DEBIAN_FRONTEND=noninteractive as_root apt-get install -y -qq python3-openvdb \
+    || echo "natscene setup: WARNING: could not install python3-openvdb; the volume stage cannot write density.vdb" >&2
+fi

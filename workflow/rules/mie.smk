@@ -44,8 +44,10 @@ def _mie_table_path(droplets):
 
 
 def _mie_volume_dir(volume):
-    """`mie_deck`: the thin stratocumulus deck of rule mie_deck; else a volume of the volume stage."""
-    return f"{RESULTS}/mie/deck" if volume == "mie_deck" else f"{RESULTS}/volumes/{volume}"
+    """A volume of the volume stage (the demo volume, or the stratocumulus deck of the glory and fogbow)."""
+    if volume not in config["volumes"]:
+        raise ValueError(f"config: Mie volume {volume!r} is not a key of 'volumes'")
+    return f"{RESULTS}/volumes/{volume}"
 
 
 def _mie_phase_droplets(phase):
@@ -69,23 +71,6 @@ rule mie_table_droplets:
         mem_mb=estimated_mem_mb("mie_table_droplets"),
     script:
         script_path("mie_table.py")
-
-
-rule mie_deck:
-    output:
-        density=f"{RESULTS}/mie/deck/density.vol",
-        meta=f"{RESULTS}/mie/deck/meta.yaml",
-    params:
-        deck=lambda wc: config["mie"]["deck"],
-        sigma_t=lambda wc: config["mie"]["solver"]["sigma_t"],
-        code=script_fingerprint("mie_deck.py"),
-    log:
-        f"{RESULTS}/logs/mie/deck.log",
-    threads: 1
-    resources:
-        mem_mb=estimated_mem_mb("mie_deck"),
-    script:
-        script_path("mie_deck.py")
 
 
 rule point_scatter:
@@ -113,7 +98,11 @@ rule point_scatter:
 def _mie_shot_inputs(wc):
     demo = config["mie"]["demo"]
     shot = demo[wc.shot]
-    vol = "mie_deck" if shot["cloud"] == "deck" else wc.volume
+    vol = wc.volume
+    if shot["cloud"] == "deck":
+        vol = demo["deck"]
+        if not vol:
+            raise ValueError(f"config key 'mie.demo.{wc.shot}.cloud' is 'deck' but 'mie.demo.deck' names no volume")
     sun = mie_sun_key(demo["sun"])
     sfx = f"-{shot['droplets']}" if shot["droplets"] else ""
     return {"density": f"{_mie_volume_dir(vol)}/density.vol", "meta": f"{_mie_volume_dir(vol)}/meta.yaml",

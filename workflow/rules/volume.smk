@@ -1,8 +1,10 @@
-# Stage: volume generation (Dobashi 2012 §3: procedural cloud volumes in the style of Ebert et al.)
+# Stage: volume generation (docs/stages/volume.md): procedural clouds (coarse shape + pyroclastic Perlin-Worley
+# displacement + Nubis erosion) or an imported grid, in world metres; written as Mitsuba .vol and OpenVDB .vdb.
 
 rule volume:
     output:
         density=f"{RESULTS}/volumes/{{volume}}/density.vol",
+        vdb=f"{RESULTS}/volumes/{{volume}}/density.vdb",
         preview_exr=f"{RESULTS}/volumes/{{volume}}/preview.exr",
         preview_png=report(f"{RESULTS}/volumes/{{volume}}/preview.png", category="Volumes",
                            caption="../report/volume_preview.rst"),

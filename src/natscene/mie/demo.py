@@ -13,9 +13,10 @@ Where nature shows these effects (and so where the demo shoots them):
 - glory and fogbow: on the tops of *thin, uniform-droplet* stratocumulus decks and fog banks, with the sun
   behind the observer. The rings need a narrow droplet spectrum (effective variance v_eff ≲ 0.05; at
   v_eff = 0.1 they wash out, Laven 2005) and a view where single scattering is a large share of the light
-  (optical depth of a few, not the τ ≈ 70 of a towering cumulus). :func:`stratocumulus_deck` builds such a
-  deck (a slab of given vertical optical depth with a gently textured top); :func:`deck_camera` looks at it
-  from above;
+  (optical depth of a few, not the τ ≈ 70 of a towering cumulus). Such a deck is a ``stratocumulus``
+  volume of the volume stage (a broken, cellular layer a few hundred metres thick with a billowy top, its
+  extinction scale set for a mean vertical optical depth of a few: ``reference_axis: y``);
+  :func:`deck_camera` looks at it from above;
 - silver lining: toward the sun, the sun just hidden behind a cloud edge: the diffraction peak of the
   droplets (4π p(0°) in the thousands, ≈ 1–2° wide) lights the thin edge brilliantly within a degree or
   two of the sun. :func:`silver_lining_camera` finds such a line of sight (sun behind ≥ ``hide_tau`` of
@@ -58,56 +59,57 @@ def demo_camera(shot: str, volume, sun_dir, distance: float = 2.2, fov: float = 
     return Camera(tuple(pos), tuple(c), tuple(up), float(fov), int(w), int(h))
 
 
-def stratocumulus_deck(size: float = 2.0, resolution: int = 160, thickness: float = 0.06,
-                       relief: float = 0.15, relief_scale: float = 0.15, optical_depth: float = 3.0,
-                       sigma_t: float = 0.3, seed: int = 0):
-    """A thin stratocumulus / fog deck: a horizontal slab ``size`` × ``size`` (world units, centred on
-    x = z = 0) of cubic voxels (``resolution`` across), ``thickness`` thick above a base one voxel over
-    the box floor, whose top is raised by ``relief`` × thickness × a smooth random field (Gaussian-filtered
-    white noise of correlation length ``relief_scale``, unit standard deviation, clipped at ±2.5σ; seeded).
-    Density is 1 inside with one-voxel soft surfaces and fades to 0 over the outer 5 % of the deck. The
-    extinction scale is set so that the mean vertical optical depth (σ_e = ``sigma_t`` × extinction scale,
-    the project convention) over the deck's interior is ``optical_depth``.
-    -> :class:`~natscene.volume.grid.Volume`."""
-    from scipy.ndimage import gaussian_filter
+def deck_top(deck, level: float = 0.1) -> float:
+    """Height of a deck's top (world y): the median, over the cloudy columns (peak density >= 0.5), of the
+    top of the highest voxel whose density reaches ``level``."""
+    d = np.asarray(deck.density)
+    vy = float(deck.voxel_size[1])
+    above = d >= level                                            # [z, y, x]
+    cloudy = d.max(axis=1) >= 0.5
+    if not cloudy.any():
+        raise ValueError("deck_top: the deck has no column with density >= 0.5")
+    ny = d.shape[1]
+    highest = ny - 1 - np.argmax(above[:, ::-1, :], axis=1)       # [z, x] index of the highest such voxel
+    return float(deck.bbox_min[1]) + vy * (float(np.median(highest[cloudy])) + 1.0)
 
-    from natscene.volume.grid import Volume
 
-    if not (size > 0 and thickness > 0 and optical_depth > 0 and sigma_t > 0 and resolution >= 8):
-        raise ValueError("stratocumulus_deck: size, thickness, optical_depth, sigma_t must be > 0, "
-                         "resolution >= 8")
-    vox = size / resolution
-    ny = max(4, int(np.ceil(thickness * (1 + 2.5 * relief) / vox)) + 3)
-    rng = np.random.default_rng(seed)
-    noise = gaussian_filter(rng.standard_normal((resolution, resolution)), relief_scale / vox, mode="wrap")
-    noise = np.clip(noise / max(float(noise.std()), 1e-12), -2.5, 2.5)
-    top = vox + thickness * (1 + relief * noise)                 # (z, x) top height above the box floor
-    y = (np.arange(ny) + 0.5) * vox                              # voxel centres
-    # soft (one-voxel) top and base: the covered fraction of each voxel
-    dens = np.clip((top[:, None, :] - y[None, :, None]) / vox + 0.5, 0, 1) \
-        * np.clip((y[None, :, None] - vox) / vox + 0.5, 0, 1)
-    c = (np.arange(resolution) + 0.5) / resolution
-    edge = np.clip(np.minimum(c, 1 - c) / 0.05, 0, 1)            # fade over the outer 5 %
-    dens = (dens * (edge[:, None, None] * edge[None, None, :])).astype(np.float32)
-    inner = (edge[:, None] * edge[None, :]) >= 1
-    column = float(dens.sum(axis=1)[inner].mean()) * vox         # mean ∫ D dy over the interior
-    lo = np.array([-size / 2, 0.0, -size / 2])
-    hi = np.array([size / 2, ny * vox, size / 2])
-    return Volume(dens, lo, hi, float(optical_depth / (sigma_t * column)))
+def deck_aim(deck, radius: float) -> tuple[float, float]:
+    """World (x, z) of the deck column nearest its centre around which the deck is closed (every column
+    within ``radius`` of it, capped at a quarter of the deck's width, has peak density >= 0.5): a broken deck
+    has clear lanes between its cells, and a glory is watched on the cloud, not on a lane. The centre
+    itself when no column qualifies."""
+    from scipy import ndimage
+
+    d = np.asarray(deck.density)
+    vox = float(deck.voxel_size[0])
+    nz, _, nx = d.shape
+    lo, hi = np.asarray(deck.bbox_min, float), np.asarray(deck.bbox_max, float)
+    cloudy = d.max(axis=1) >= 0.5                                         # [z, x]
+    r = int(np.ceil(min(radius, 0.25 * (hi[0] - lo[0])) / vox))
+    if r > 0:
+        yy, xx = np.mgrid[-r:r + 1, -r:r + 1]
+        ok = ndimage.binary_erosion(cloudy, structure=(xx ** 2 + yy ** 2) <= r * r, border_value=0)
+    else:
+        ok = cloudy
+    if not ok.any():
+        return float((lo[0] + hi[0]) / 2), float((lo[2] + hi[2]) / 2)
+    zi, xi = np.nonzero(ok)
+    k = int(np.argmin((zi + 0.5 - nz / 2) ** 2 + (xi + 0.5 - nx / 2) ** 2))
+    return float(lo[0] + (xi[k] + 0.5) * vox), float(lo[2] + (zi[k] + 0.5) * vox)
 
 
 def deck_camera(shot: str, deck, sun_dir, distance: float = 1.5, fov: float = 10.0, resolution=(480, 360),
                 angle: float = 0.0) -> Camera:
-    """A camera above a deck with the sun behind it, aimed at the deck's top centre from ``distance``:
-    ``glory`` looks at the antisolar point; ``fogbow`` ``angle`` degrees from it, sideways (same side of
-    the sun's vertical plane for positive angles), so the side arc of the bow crosses the frame."""
+    """A camera above a deck with the sun behind it, aimed from ``distance`` at the deck's top over
+    :func:`deck_aim` (the cloud-covered spot nearest the deck's centre); ``glory`` looks at the antisolar
+    point; ``fogbow`` ``angle`` degrees from it, sideways (same side of the sun's vertical plane for positive
+    angles), so the side arc of the bow crosses the frame."""
     s = np.asarray(sun_dir, float) / np.linalg.norm(sun_dir)
     if s[1] <= 0.05:
         raise ValueError("deck_camera: the sun must be above the horizon to light the deck from above")
-    vy = float(deck.voxel_size[1])
-    col = deck.density.sum(axis=1) * vy                          # ∫ D dy per column
-    top = float(deck.bbox_min[1]) + vy + float(np.median(col[col > 0.5 * col.max()]))  # base one voxel up
-    c = np.array([(deck.bbox_min[0] + deck.bbox_max[0]) / 2, top, (deck.bbox_min[2] + deck.bbox_max[2]) / 2])
+    top = deck_top(deck)
+    x, z = deck_aim(deck, distance * np.tan(np.radians(min(fov, 30.0) / 2)))
+    c = np.array([x, top, z])
     to_cam = s
     if shot == "fogbow":
         # sideways (about the axis in the sun's vertical plane): the view still looks down at the deck,

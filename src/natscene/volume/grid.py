@@ -5,8 +5,10 @@ yres, zres, int32 channels, 6 float32 bounding box (xmin, ymin, zmin, xmax, ymax
 with x varying fastest: ``data[((z * yres + y) * xres + x) * channels + c]``. In memory a grid is a
 float32 array indexed ``[z, y, x]`` (the layout of ``mi.TensorXf`` for ``gridvolume``).
 
-World placement (DESIGN §3 and the contract between stages): y up, the box centred on x = z = 0 with its
-base at y = 0, cubic voxels, longest side = ``size``. Extinction: mu_t(x) = sigma_t * rho(x) * extinction_scale.
+World placement (DESIGN §3 and the contract between stages): metres, y up, ground y = 0; :func:`placement`
+gives a box centred on x = z = 0 with its base at y = 0, cubic voxels, longest side = ``size``, and the
+volume stage lifts it to its altitude (:mod:`natscene.volume.build`). Extinction: mu_t(x) [1/m] = sigma_t *
+rho(x) * extinction_scale.
 """
 from __future__ import annotations
 
@@ -105,13 +107,21 @@ def check_density(density: np.ndarray, source: str) -> np.ndarray:
     return d / m if m > 1 else d
 
 
-def import_grid(path, axes: str = "zyx") -> np.ndarray:
-    """Load a user grid (``.npy`` in ``axes`` order, or Mitsuba ``.vol``) as validated ``[nz, ny, nx]``."""
+def import_grid(path, axes: str = "zyx", grid: str = "density"):
+    """Load a user grid as validated ``[nz, ny, nx]`` and its world box when the file has one:
+    ``.vdb`` (OpenVDB float grid ``grid``, with its transform), Mitsuba ``.vol`` (with its bbox) or ``.npy``
+    in ``axes`` order (no box: None). -> (density, (bbox_min, bbox_max) or None)."""
     path = Path(path)
     if not path.is_file():
         raise InputError(f"{path}: user volume grid not found (config key volumes.<name>.path)")
-    if path.suffix == ".vol":
-        d, _, _ = read_vol(path)
+    box = None
+    if path.suffix == ".vdb":
+        from natscene.volume.vdb import read_vdb
+        d, lo, hi, _ = read_vdb(path, grid)
+        box = (lo, hi)
+    elif path.suffix == ".vol":
+        d, lo, hi = read_vol(path)
+        box = (lo, hi)
     elif path.suffix == ".npy":
         try:
             d = np.load(path, allow_pickle=False)
@@ -122,8 +132,8 @@ def import_grid(path, axes: str = "zyx") -> np.ndarray:
         if d.ndim == 3 and axes == "xyz":
             d = np.transpose(d, (2, 1, 0))
     else:
-        raise InputError(f"{path}: unsupported grid format '{path.suffix}' (use .npy or Mitsuba .vol)")
-    return check_density(d, str(path))
+        raise InputError(f"{path}: unsupported grid format '{path.suffix}' (use .vdb, .npy or Mitsuba .vol)")
+    return check_density(d, str(path)), box
 
 
 def load_volume(directory) -> Volume:

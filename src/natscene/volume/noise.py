@@ -88,3 +88,119 @@ def radial_energy_spectrum(field: np.ndarray, extent) -> tuple[np.ndarray, np.nd
     k = np.sqrt(kx ** 2 + ky ** 2 + kz ** 2).ravel()
     shell = np.round(k).astype(np.int64)
     return np.arange(shell.max() + 1, dtype=np.float64), np.bincount(shell, p)
+
+
+# ------------------------------------------------------------------ periodic noise tiles (Schneider's Nubis)
+# The production modeller samples small periodic 3-D noise textures at several frequencies, as Schneider's
+# Nubis cloud system does on the GPU (a 128^3 "Perlin-Worley" shape texture and a 32^3 Worley detail texture,
+# "The real-time volumetric cloudscapes of Horizon: Zero Dawn", SIGGRAPH 2015; "Nubis", 2017). A tile of ``n``
+# texels holds ``cells`` noise cells per axis and wraps, so the noise of any frequency is a trilinear lookup.
+
+def perlin_tile(n: int, cells: int, rng: np.random.Generator) -> np.ndarray:
+    """Periodic 3-D gradient (Perlin) noise, float32 (n, n, n), ``cells`` lattice cells per axis, scaled to
+    unit maximum magnitude (values in [-1, 1]).
+
+    Perlin's improved noise: random unit gradients at the lattice points, the dot product of each corner's
+    gradient with the offset to the sample, blended with the quintic fade ``6t^5 - 15t^4 + 10t^3``."""
+    g = rng.normal(size=(cells, cells, cells, 3))
+    g /= np.linalg.norm(g, axis=-1, keepdims=True)
+    u = (np.arange(n) + 0.5) / n * cells
+    i0 = np.floor(u).astype(np.int64)
+    f = u - i0
+    w = _fade(f)
+    out = np.zeros((n, n, n), np.float64)
+    for dz in (0, 1):
+        for dy in (0, 1):
+            for dx in (0, 1):
+                cz, cy, cx = (i0 + dz) % cells, (i0 + dy) % cells, (i0 + dx) % cells
+                grad = g[cz[:, None, None], cy[None, :, None], cx[None, None, :]]          # (n, n, n, 3)
+                dot = (grad[..., 0] * (f - dx)[None, None, :] + grad[..., 1] * (f - dy)[None, :, None]
+                       + grad[..., 2] * (f - dz)[:, None, None])
+                wz = w if dz else 1 - w
+                wy = w if dy else 1 - w
+                wx = w if dx else 1 - w
+                out += dot * wz[:, None, None] * wy[None, :, None] * wx[None, None, :]
+    return (out / max(float(np.abs(out).max()), 1e-12)).astype(np.float32)
+
+
+def worley_tile(n: int, cells: int, rng: np.random.Generator) -> np.ndarray:
+    """Periodic Worley F1 noise, float32 (n, n, n): distance (in cell units) from each texel to the nearest of
+    one jittered feature point per cell (``cells`` per axis, wrapping), over the 27 neighbouring cells."""
+    pts = rng.uniform(0, 1, (cells, cells, cells, 3))
+    out = np.empty((n, n, n), np.float32)
+    _worley_kernel()(pts, out)
+    return out
+
+
+_WORLEY = None
+
+
+def _worley_kernel():
+    """Compiled F1 search (numba, cached on disk): 27 neighbour cells per texel."""
+    global _WORLEY
+    if _WORLEY is None:
+        import numba as nb
+
+        @nb.njit(parallel=True, cache=True)
+        def kern(pts, out):
+            n = out.shape[0]
+            c = pts.shape[0]
+            for z in nb.prange(n):
+                uz = (z + 0.5) / n * c
+                cz = int(np.floor(uz))
+                fz = uz - cz
+                for y in range(n):
+                    uy = (y + 0.5) / n * c
+                    cy = int(np.floor(uy))
+                    fy = uy - cy
+                    for x in range(n):
+                        ux = (x + 0.5) / n * c
+                        cx = int(np.floor(ux))
+                        fx = ux - cx
+                        best = 1e30
+                        for dz in range(-1, 2):
+                            kz = (cz + dz) % c
+                            for dy in range(-1, 2):
+                                ky = (cy + dy) % c
+                                for dx in range(-1, 2):
+                                    kx = (cx + dx) % c
+                                    ax = dx + pts[kz, ky, kx, 0] - fx
+                                    ay = dy + pts[kz, ky, kx, 1] - fy
+                                    az = dz + pts[kz, ky, kx, 2] - fz
+                                    d2 = ax * ax + ay * ay + az * az
+                                    if d2 < best:
+                                        best = d2
+                        out[z, y, x] = np.sqrt(best)
+        _WORLEY = kern
+    return _WORLEY
+
+
+def worley_fbm_tile(n: int, cells: int, rng: np.random.Generator, octaves: int = 3) -> np.ndarray:
+    """Inverted Worley fBm in [0, 1] (1 at feature points): ``sum_o 0.5^o (1 - F1_o)`` over octaves of
+    ``cells * 2^o`` cells, normalised; the billowy "cauliflower" basis of Nubis' shape and detail textures."""
+    out = np.zeros((n, n, n), np.float32)
+    amp, total = 1.0, 0.0
+    for o in range(octaves):
+        out += np.float32(amp) * (1 - np.clip(worley_tile(n, cells * 2 ** o, rng), 0, 1))
+        total += amp
+        amp *= 0.5
+    out /= np.float32(total)
+    lo, hi = float(out.min()), float(out.max())
+    return ((out - lo) / max(hi - lo, 1e-12)).astype(np.float32)
+
+
+def perlin_worley_tile(n: int, cells: int, rng: np.random.Generator) -> np.ndarray:
+    """Schneider's Perlin-Worley noise in [0, 1]: Perlin fBm (3 octaves, in [0, 1]) dilated by inverted Worley
+    fBm, ``remap(perlin, worley - 1, 1, 0, 1)`` (Nubis 2015): connected, billowy blobs instead of Perlin's
+    wispy ridges or Worley's isolated cells."""
+    per = np.zeros((n, n, n), np.float32)
+    amp, total = 1.0, 0.0
+    for o in range(3):
+        per += np.float32(amp) * perlin_tile(n, cells * 2 ** o, rng)
+        total += amp
+        amp *= 0.5
+    per = per / np.float32(total) * np.float32(0.5) + np.float32(0.5)
+    wor = worley_fbm_tile(n, cells, rng)
+    pw = (per - (wor - 1)) / (2 - wor)                   # remap(per, wor - 1, 1, 0, 1)
+    lo, hi = float(pw.min()), float(pw.max())
+    return ((pw - lo) / max(hi - lo, 1e-12)).astype(np.float32)
