@@ -83,6 +83,7 @@ def _shot_frame_inputs(wc):
     return ins
 
 
+_MIE_MARCH_KEYS = ("mie_scale", "iso_scale", "step_voxels", "sun_step_voxels", "field_smooth")
 _FRAME_KEYS = ("resolution", "render", "sky", "denoise", "denoiser", "phase", "mie_table", "mie_sun_step")
 
 
@@ -129,7 +130,8 @@ rule render_frame:
         shot=_shot_frame_settings,
         exposure=lambda wc: config["shots"][wc.shot]["exposure"],
         mie_sun=_shot_mie_sun,
-        mie_render=lambda wc: config["mie"]["render"] if _shot_mie_sun(wc) else {},
+        # only the final-pass settings the Mie/HG ratio uses (not the demo's light colour or sky)
+        mie_render=lambda wc: {k: config["mie"]["render"][k] for k in _MIE_MARCH_KEYS} if _shot_mie_sun(wc) else {},
         mie_sigma_t=lambda wc: config["mie"]["solver"]["sigma_t"] if _shot_mie_sun(wc) else None,
         code=fingerprint("keyframes", "scatter", "volume", "geometry", "io", "color", "variant", "denoise", "mie"),
     log:
