@@ -2,10 +2,17 @@
 # Per frame: `interpolate` (inputs: ONLY the fit params.yaml of the keyframes the frame depends on; params:
 # ONLY those keyframes' settings), then `render_frame` (forward renderer, one job per frame: parallel and
 # cluster-friendly). So editing one keyframe reruns only the frames of its adjacent segments.
+# `phase: mie_blend` frames also take the point-to-point Mie and HG solutions of their sun (rule `point_scatter`
+# of the Mie stage), keyed by the frame's sun rounded to `mie_sun_step` degrees, which is known from the config
+# alone: frames whose suns round alike share one solution job in the DAG.
 # Per shot: `animation` (mp4, or gif without an encoder) and a filmstrip.
 from natscene.keyframes.animation import animation_suffix as _anim_suffix
 from natscene.keyframes.shot import bracket as _shot_bracket
 from natscene.keyframes.shot import camera_neighbours as _shot_camera_neighbours
+from natscene.keyframes.shot import frame_sun as _shot_frame_sun
+from natscene.keyframes.shot import frame_t as _shot_frame_t
+from natscene.keyframes.shot import quantised_sun as _shot_quantised_sun
+from natscene.keyframes.shot import sun_key as _shot_sun_key
 from natscene.keyframes.shot import resolve_keyframe as _shot_resolve_keyframe
 from natscene.keyframes.shot import validate_shot as _validate_shot
 
@@ -53,6 +60,39 @@ def _shot_volume(wc, name):
     return f"{RESULTS}/volumes/{config['shots'][wc.shot]['volume']}/{name}"
 
 
+def _shot_mie_sun(wc):
+    """`mie_blend`: the `point_scatter` sun key of this frame (its interpolated sun, rounded); else None."""
+    shot = _shot_cfg(wc)
+    if shot["phase"] != "mie_blend":
+        return None
+    keys = _shot_keys(wc)
+    _, az, el = _shot_frame_sun(keys, _shot_frame_t(int(wc.frame), keys, shot["easing"]))
+    return _shot_sun_key(*_shot_quantised_sun(az, el, shot["mie_sun_step"]))
+
+
+def _shot_frame_inputs(wc):
+    ins = {"state": f"{RESULTS}/shots/{wc.shot}/params/{wc.frame}.yaml",
+           "density": _shot_volume(wc, "density.vol"), "meta": _shot_volume(wc, "meta.yaml")}
+    sun = _shot_mie_sun(wc)
+    if sun is not None:
+        shot = config["shots"][wc.shot]
+        sfx = f"-{shot['mie_table']}" if shot["mie_table"] else ""
+        base = f"{RESULTS}/mie/pointcloud/{shot['volume']}/{sun}"
+        ins.update(table=_mie_table_path(shot["mie_table"]), mie=f"{base}/mie{sfx}/solution.npz",
+                   hg=f"{base}/hg{sfx}/solution.npz")
+    return ins
+
+
+_MIE_MARCH_KEYS = ("mie_scale", "iso_scale", "step_voxels", "sun_step_voxels", "field_smooth")
+_FRAME_KEYS = ("resolution", "render", "sky", "denoise", "denoiser", "phase", "mie_table", "mie_sun_step")
+
+
+def _shot_frame_settings(wc):
+    """The shot's settings a frame depends on (not its keyframes: those reach the frame through its state)."""
+    shot = _shot_cfg(wc)
+    return {k: shot[k] for k in _FRAME_KEYS}
+
+
 rule interpolate:
     output:
         f"{RESULTS}/shots/{{shot}}/params/{{frame}}.yaml",
@@ -79,26 +119,27 @@ rule interpolate:
 rule render_frame:
     output:
         exr=f"{RESULTS}/shots/{{shot}}/frames/{{frame}}.exr",
+        raw=f"{RESULTS}/shots/{{shot}}/frames/{{frame}}.raw.exr",
         png=f"{RESULTS}/shots/{{shot}}/frames/{{frame}}.png",
     input:
-        state=f"{RESULTS}/shots/{{shot}}/params/{{frame}}.yaml",
-        density=lambda wc: _shot_volume(wc, "density.vol"),
-        meta=lambda wc: _shot_volume(wc, "meta.yaml"),
+        unpack(_shot_frame_inputs),
     wildcard_constraints:
         shot=r"[^/]+",
         frame=r"\d{4}",
     params:
-        resolution=lambda wc: config["shots"][wc.shot]["resolution"],
-        render=lambda wc: config["shots"][wc.shot]["render"],
-        sky=lambda wc: config["shots"][wc.shot]["sky"],
+        shot=_shot_frame_settings,
         exposure=lambda wc: config["shots"][wc.shot]["exposure"],
+        mie_sun=_shot_mie_sun,
+        # only the final-pass settings the Mie/HG ratio uses (not the demo's light colour or sky)
+        mie_render=lambda wc: {k: config["mie"]["render"][k] for k in _MIE_MARCH_KEYS} if _shot_mie_sun(wc) else {},
+        mie_sigma_t=lambda wc: config["mie"]["solver"]["sigma_t"] if _shot_mie_sun(wc) else None,
         code=script_fingerprint("render_frame.py"),
     log:
         f"{RESULTS}/logs/shots/{{shot}}/render_frame.{{frame}}.log",
     threads: config["threads"]
     resources:
         mem_mb=estimated_mem_mb("render_frame"),
-        runtime=30,
+        runtime=lambda wc: 30 if config["shots"][wc.shot]["resolution"][0] * config["shots"][wc.shot]["resolution"][1] <= 640 * 480 else 120,
     script:
         script_path("render_frame.py")
 

@@ -33,6 +33,15 @@ def validate_shot(name: str, shot: dict, config: dict) -> None:
     ats = [kf["at"] for kf in shot["keyframes"]]
     if len(set(ats)) != len(ats):
         raise InputError(f"config key '{_key(name)}.keyframes': two keyframes share a frame index ({sorted(ats)})")
+    if shot.get("phase", "hg") == "mie_blend":
+        table = shot.get("mie_table")
+        if table is not None and table not in (config.get("mie", {}).get("droplets") or {}):
+            raise InputError(f"config key '{_key(name)}.mie_table': {table!r} is not in 'mie.droplets' "
+                             f"(known: {sorted((config.get('mie', {}).get('droplets') or {}))}); use one of them or "
+                             f"null for the default table")
+    elif shot.get("mie_table") is not None:
+        raise InputError(f"config key '{_key(name)}.mie_table': only used with 'phase: mie_blend' (phase is "
+                         f"{shot.get('phase', 'hg')!r})")
     for i, kf in enumerate(shot["keyframes"]):
         if kf["at"] >= shot["frames"]:
             raise InputError(f"config key '{_key(name, i)}.at': frame {kf['at']} is past the shot's last frame "
@@ -129,6 +138,45 @@ def _camera_dict(v: np.ndarray) -> dict:
     return {"position": v[0:3].tolist(), "look_at": v[3:6].tolist(), "up": up.tolist(), "fov": float(v[9])}
 
 
+def frame_t(frame: int, keys: list[dict], easing: str = "linear") -> float:
+    """The eased position t in [0, 1] of ``frame`` between its one or two keyframes (0 with one)."""
+    if not 1 <= len(keys) <= 2:
+        raise ValueError("frame_t: one or two keyframes")
+    a, b = keys[0], keys[-1]
+    return float(ease(segment_t(frame, a["at"], b["at"]), easing)) if len(keys) == 2 else 0.0
+
+
+def frame_sun(keys: list[dict], t: float) -> tuple[np.ndarray, float, float]:
+    """(unit direction toward the sun, azimuth, elevation) at eased position ``t`` between the keyframes' suns:
+    slerp of the directions, the keyframes' own angles exactly at t = 0 and t = 1. Needs only the keyframes'
+    ``sun`` entries (config), so the workflow knows every frame's sun before any job runs."""
+    a, b = keys[0], keys[-1]
+    d0 = sun_direction(a["sun"]["azimuth"], a["sun"]["elevation"])
+    d1 = sun_direction(b["sun"]["azimuth"], b["sun"]["elevation"])
+    if t == 0:
+        return d0, float(a["sun"]["azimuth"]), float(a["sun"]["elevation"])
+    if t == 1:
+        return d1, float(b["sun"]["azimuth"]), float(b["sun"]["elevation"])
+    d = slerp(d0, d1, t)
+    az, el = direction_to_sun_angles(d)
+    return d, az, el
+
+
+def quantised_sun(azimuth: float, elevation: float, step: float = 0.5) -> tuple[float, float]:
+    """The sun's angles rounded to multiples of ``step`` degrees (azimuth in [0, 360)): frames whose suns
+    round alike share one point-to-point Mie solution (rule ``point_scatter``)."""
+    if not step > 0:
+        raise ValueError(f"quantised_sun: step must be > 0, got {step}")
+    az = (round((float(azimuth) % 360.0) / step) * step) % 360.0 + 0.0
+    el = min(90.0, max(-90.0, round(float(elevation) / step) * step)) + 0.0
+    return float(f"{az:.6g}"), float(f"{el:.6g}")
+
+
+def sun_key(azimuth: float, elevation: float) -> str:
+    """The ``{sun}`` wildcard of rule ``point_scatter``: 'az130_el35', 'az112.5_el-2'."""
+    return f"az{azimuth:g}_el{elevation:g}"
+
+
 def frame_state(frame: int, keys: list[dict], easing: str = "linear", camera_path: str = "linear",
                 path_keys: list[dict] | None = None) -> dict:
     """Everything a frame needs, from its one or two keyframes (``keys``: resolved keyframes in frame order,
@@ -141,22 +189,13 @@ def frame_state(frame: int, keys: list[dict], easing: str = "linear", camera_pat
     if not 1 <= len(keys) <= 2:
         raise ValueError("frame_state: one or two keyframes")
     a, b = keys[0], keys[-1]
-    t = ease(segment_t(frame, a["at"], b["at"]), easing) if len(keys) == 2 else 0.0
-    t = float(t)
+    t = frame_t(frame, keys, easing)
     params = {}
     for p in PARAMS:
         params[p] = float(lerp(a["params"][p], b["params"][p], t))
     for c in COLOURS:
         params[c] = lerp(a["params"][c], b["params"][c], t).tolist()
-    d0 = sun_direction(a["sun"]["azimuth"], a["sun"]["elevation"])
-    d1 = sun_direction(b["sun"]["azimuth"], b["sun"]["elevation"])
-    if t == 0:
-        d, (az, el) = d0, (float(a["sun"]["azimuth"]), float(a["sun"]["elevation"]))
-    elif t == 1:
-        d, (az, el) = d1, (float(b["sun"]["azimuth"]), float(b["sun"]["elevation"]))
-    else:
-        d = slerp(d0, d1, t)
-        az, el = direction_to_sun_angles(d)
+    d, az, el = frame_sun(keys, t)
     if camera_path == "catmull_rom" and len(keys) == 2 and path_keys and len(path_keys) > 2:
         x = a["at"] + t * (b["at"] - a["at"])
         cam = _camera_dict(catmull_rom([_camera_vec(k["camera"]) for k in path_keys],
@@ -167,3 +206,17 @@ def frame_state(frame: int, keys: list[dict], easing: str = "linear", camera_pat
         raise ValueError(f"unknown camera path {camera_path!r} (linear or catmull_rom)")
     return {"frame": int(frame), "t": t, "keyframes": [int(k["at"]) for k in keys], "params": params,
             "sun": {"direction": np.asarray(d, float).tolist(), "azimuth": az, "elevation": el}, "camera": cam}
+
+
+def frame_camera(camera: dict, resolution) -> "Camera":
+    """The pinhole camera of a frame state's ``camera`` at ``resolution`` [w, h]. ``fov`` is the VERTICAL field
+    of view: any resolution sees the same vertical extent of the scene (a wider aspect ratio sees more to the
+    sides, never a cropped or stretched picture), so a cloud covers the same fraction of the frame's height at
+    640x480 and at 1920x1080."""
+    from natscene.geometry import Camera
+
+    w, h = (int(v) for v in resolution)
+    if w < 1 or h < 1:
+        raise InputError(f"frame resolution must be positive, got {list(resolution)}")
+    return Camera(tuple(float(c) for c in camera["position"]), tuple(float(c) for c in camera["look_at"]),
+                  tuple(float(c) for c in camera.get("up", (0.0, 1.0, 0.0))), float(camera.get("fov", 40.0)), w, h)
