@@ -4,14 +4,15 @@ generates spectral images convertible to RGB"): the same set and the same rays a
 every material, light and pixel is a spectrum on the wavelength grid (default 81 bands) and every
 light-material interaction is a per-band product, on every sample and every bounce.
 
-Preprocessing (once per render, timed with it): the RGB inputs become spectra the way a spectral renderer's
-material database holds them, with the hybrid's published upsampling (:mod:`natscene.spectral.upsampling`):
-the background plate per pixel (``rgb_to_radiance``), the surfaces' colours and Dong's highlight (``rgb_to_reflectance``), κ_a (its per-band extinction); the sun is
-its SPD. Rendering: filtered texture values are upsampled per sample (for the linear Mallett-Yuksel method
-identical to filtering per-texel spectra), sky radiance toward a ray and the dome's irradiance per sample; every sample is shaded as
-ρ(λ)/π·(E_sun(λ)·cos·V + E_sky(n, λ)) (+ translucency), hazed by e^{−κ(λ)t} toward L_sky(λ), films as
-R(θ_v, λ)·L_env(λ) + (R(θ_d, λ) + highlight(λ))·E_sun(λ)·lobe with L_env the *spectral* radiance the mirror
-ray gathers; the pixel spectra are integrated to XYZ -> linear sRGB once at the end (§2.4).
+Preprocessing and rendering (the preprocessing timed with the render): every RGB input becomes spectra with the
+hybrid's published upsampling (:mod:`natscene.spectral.upsampling`), each by the cheaper of two equivalent
+routes (:class:`SpectralInputs`): once per entry (the background plate per pixel, the surfaces' colours, Dong's
+highlight, κ_a as a per-band extinction) or per lookup (texture values filtered in RGB, the sky's radiance and
+the sky dome's irradiance: upsampled per sample; identical for the linear Mallett-Yuksel method). The sun is
+its SPD. Every sample is shaded on the grid as ρ(λ)/π·(E_sun(λ)·cos·V + E_sky(n, λ)) (+ translucency), hazed
+by e^{−κ(λ)t} toward L_sky(λ), films as R(θ_v, λ)·L_env(λ) + (R(θ_d, λ) + highlight(λ))·E_sun(λ)·lobe with
+L_env the *spectral* radiance the mirror ray gathers; the pixel spectra are integrated to XYZ -> linear sRGB
+once at the end (§2.4).
 
 With the Mallett-Yuksel upsampling (linear, exact round trip under D65) the two modes agree under a D65 sun
 and a neutral sky; under coloured light they differ on RGB materials, because a product of two upsampled
@@ -30,11 +31,17 @@ from natscene.spectral.upsampling import rgb_to_radiance, rgb_to_reflectance
 
 
 class SpectralInputs:
-    """Spectra of the set's RGB inputs (the spectral renderer's preprocessing)."""
+    """Spectra of the set's RGB inputs (the spectral renderer's preprocessing). Each input takes the cheaper of
+    two equivalent routes (identical results for the linear Mallett-Yuksel method; the fair choice for the
+    reference): spectra per entry once when the input has fewer entries than the render has lookups (the plate
+    per pixel, the surfaces' colours, Dong's highlight, κ_a), else the RGB value upsampled per lookup (the
+    textures, whose filtered lookups are upsampled; the sky table and the sky dome's irradiance, evaluated per
+    sample in RGB and upsampled)."""
 
     def __init__(self, r: SetRenderer):
         spec = r.spec
         g, up = spec.grid, spec.upsampling
+        self.grid, self.method = g, up
         self.plate = rgb_to_radiance(spec.plate.reshape(-1, 3), g, up).astype(np.float32)
         self.surface = rgb_to_reflectance(np.asarray(r.surface_color, np.float64).reshape(-1, 3), g, up) \
             .astype(np.float32).reshape(-1, g.size)
@@ -42,35 +49,47 @@ class SpectralInputs:
                           for f in spec.films]
         at = spec.atmosphere
         self.kappa = None if at is None else rgb_to_reflectance(np.asarray(at.kappa, np.float64), g, up)
-        self.grid, self.method = g, up
+        self._dome = r.dome
 
-    def irradiance(self, r: SetRenderer, normals: np.ndarray) -> np.ndarray:
+    def irradiance(self, normals: np.ndarray) -> np.ndarray:
         """Spectral sky-dome irradiance (M, N): the dome's irradiance toward each normal, upsampled."""
-        return rgb_to_radiance(r.dome.irradiance(normals).astype(np.float64), self.grid, self.method).astype(np.float32)
+        return rgb_to_radiance(self._dome.irradiance(normals), self.grid, self.method).astype(np.float32)
 
-    def sky(self, r: SetRenderer, dirs: np.ndarray) -> np.ndarray:
-        return rgb_to_radiance(r.dome.radiance(dirs).astype(np.float64), self.grid, self.method).astype(np.float32)
+    def sky(self, dirs: np.ndarray) -> np.ndarray:
+        """Spectral sky radiance (M, N) toward ``dirs``, upsampled from the sky table's RGB."""
+        return rgb_to_radiance(self._dome.radiance(dirs), self.grid, self.method).astype(np.float32)
+
+
+def _albedo(r: SetRenderer, inp: SpectralInputs, h: Hits, sel: np.ndarray, coarse: bool) -> np.ndarray:
+    """Reflectance spectra (len(sel), N) of ground/surface samples: filtered RGB lookups upsampled, the
+    untextured surfaces' own spectra."""
+    rho = rgb_to_reflectance(r.albedo_rgb(h, sel, coarse), inp.grid, inp.method).astype(np.float32)
+    kind, index = h.kind[sel], h.index[sel]
+    for i, s in enumerate(r.spec.surfaces):
+        if s.texture is None:
+            k = (kind == KIND_SURFACE) & (index == i)
+            rho[k] = inp.surface[i]
+    return rho
 
 
 def _radiance(r: SetRenderer, inp: SpectralInputs, h: Hits, sel: np.ndarray, coarse: bool = False) -> np.ndarray:
     """Spectral radiance (len(sel), N) of ground/surface samples, aerial perspective included."""
-    rho = rgb_to_reflectance(r.albedo_rgb(h, sel, coarse).astype(np.float64), inp.grid, inp.method).astype(np.float32)
+    rho = _albedo(r, inp, h, sel, coarse)
     surf = (h.kind[sel] == KIND_SURFACE)
-    for i, s in enumerate(r.spec.surfaces):  # untextured surfaces: their own upsampled colour
-        if s.texture is None:
-            k = surf & (h.index[sel] == i)
-            rho[k] = inp.surface[i]
     n = h.n[sel]
-    E = r.sun_S[None] * h.sun_front[sel, None] + inp.irradiance(r, n)
+    E = r.sun_S[None] * h.sun_front[sel, None] + inp.irradiance(n)
     tr = np.where(surf, r.translucency[np.where(surf, h.index[sel], -1)], 0.0)
     back = np.flatnonzero(tr > 0)
     if back.size:
-        E[back] += tr[back, None] * (r.sun_S[None] * h.sun_back[sel[back], None] + inp.irradiance(r, -n[back]))
+        E[back] += tr[back, None] * (r.sun_S[None] * h.sun_back[sel[back], None] + inp.irradiance(-n[back]))
     L = rho / np.float32(np.pi) * E
     if inp.kappa is not None:
         at = r.spec.atmosphere
-        T = np.exp(-inp.kappa[None] * (h.t[sel] / at.reference_distance)[:, None]).astype(np.float32)
-        L = L * T + (1 - T) * inp.sky(r, h.dirs[sel])
+        far = r.hazy(h, sel)
+        if far.any():
+            f = sel[far]
+            T = np.exp(-inp.kappa[None] * (h.t[f] / at.reference_distance)[:, None]).astype(np.float32)
+            L[far] = L[far] * T + (1 - T) * inp.sky(h.dirs[f])
     return L
 
 
@@ -87,7 +106,7 @@ def render_full_spectral(renderer: SetRenderer) -> tuple[np.ndarray, np.ndarray]
     spp = spec.spp
     origin = np.asarray(spec.camera.position, np.float64)
     for sl, dirs, ddx, ddy in r.blocks(block_rays=max(spp, (1 << 24) // (4 * N))):  # (rays x N) float32 <= 16 MB
-        h = r.trace(origin, dirs, ddx, ddy)
+        h = r.trace(origin, dirs, ddx, ddy, pixels=sl.stop - sl.start)
         n = sl.stop - sl.start
         out = np.zeros((dirs.shape[0], N), np.float32)
         bg = h.kind == KIND_SKY
@@ -98,14 +117,14 @@ def render_full_spectral(renderer: SetRenderer) -> tuple[np.ndarray, np.ndarray]
         if fm.size:
             mh: MirrorHits = r.mirror(h, fm)
             m = mh.hits
-            L_env = inp.sky(r, m.dirs)
+            L_env = inp.sky(m.dirs)
             surf = np.flatnonzero((m.kind == KIND_GROUND) | (m.kind == KIND_SURFACE))
             if surf.size:
                 L_env[surf] = _radiance(r, inp, m, surf, coarse=True)
             s = r.film_spectra(h, fm, mh, L_env, highlight_spectra=inp.highlight)[0]
             if inp.kappa is not None:
                 T = np.exp(-inp.kappa[None] * (h.t[fm] / spec.atmosphere.reference_distance)[:, None]).astype(np.float32)
-                s = s * T + (1 - T) * inp.sky(r, h.dirs[fm])
+                s = s * T + (1 - T) * inp.sky(h.dirs[fm])
             out[fm] = s
         S[sl] = out.reshape(spp, n, N).sum(0)
     S *= np.float32(1.0 / spp)

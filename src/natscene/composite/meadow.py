@@ -92,7 +92,7 @@ def build_meadow(cfg: dict, petal_textures: dict, leaf_textures: list, films: li
             return 0.0
         f0, f1 = gr.get("fade", (2.0, 4.0))
         t = float(np.clip((np.hypot(*xz) - f0) / max(f1 - f0, 1e-9), 0, 1))
-        return float(np.mean(gr.get("height", (0.04, 0.11)))) * rng.uniform(0.2, 0.6) * (1 - t * t * (3 - 2 * t))
+        return float(np.mean(gr.get("height", (0.04, 0.11)))) * rng.uniform(0.4, 0.9) * (1 - t * t * (3 - 2 * t))
 
     lv = cfg.get("leaves")
     if lv and leaf_textures:

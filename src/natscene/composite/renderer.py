@@ -42,6 +42,7 @@ from natscene.spectral.upsampling import rgb_to_radiance
 
 KIND_SKY, KIND_GROUND, KIND_SURFACE, KIND_FILM = -1, 0, 1, 2
 EPS = 2e-5  # metres: offset of secondary ray origins
+HAZE_MIN = 1e-4  # in-scattered fraction below which the aerial perspective is not evaluated
 
 
 def stratified_offsets(spp: int) -> np.ndarray:
@@ -69,6 +70,7 @@ class Hits:
     duv_dy: np.ndarray | None
     sun_front: np.ndarray  # (M,) max(n.l, 0) * V
     sun_back: np.ndarray  # (M,) max(-n.l, 0) * V (through translucent sheets)
+    pixels: int = 0  # camera rays: pixels in the block (samples are sample-major, pixel = index % pixels)
 
 
 @dataclass
@@ -177,9 +179,11 @@ class SetRenderer:
             out[vis] = np.abs(nl[vis])
         return front, back
 
-    def trace(self, origin, dirs: np.ndarray, ddx: np.ndarray | None = None, ddy: np.ndarray | None = None) -> Hits:
+    def trace(self, origin, dirs: np.ndarray, ddx: np.ndarray | None = None, ddy: np.ndarray | None = None,
+              pixels: int = 0) -> Hits:
         """Closest hits of rays from ``origin`` ((3,) or (M, 3)) along unit ``dirs`` (M, 3): meshes and ground,
-        texture footprints from the neighbour directions ``ddx``, ``ddy`` (None: no footprint), sun terms."""
+        texture footprints from the neighbour directions ``ddx``, ``ddy`` (None: no footprint), sun terms.
+        ``pixels``: for a block of camera rays (sample-major), its number of pixels."""
         t0 = time.perf_counter()
         dirs = np.asarray(dirs, np.float64)
         M = dirs.shape[0]
@@ -209,12 +213,21 @@ class SetRenderer:
         if ddx is not None:
             duv_dx = np.zeros((M, 2))
             duv_dy = np.zeros((M, 2))
-            s = np.flatnonzero(kind >= 0)
+            s = np.flatnonzero(kind > KIND_GROUND)
             if s.size:
                 duv_dx[s], duv_dy[s] = texture_derivatives(o[s], p[s], ng[s], ddx[s], ddy[s], dp_du[s], dp_dv[s])
+            s = np.flatnonzero(kind == KIND_GROUND)
+            if s.size:  # the plane y = 0: the neighbour rays' own ground points, over the texture's extent
+                inv = np.array([1.0 / gr.extent[0], 1.0 / gr.extent[1]])
+                for nd, out in ((ddx, duv_dx), (ddy, duv_dy)):
+                    dd = nd[s]
+                    with np.errstate(divide="ignore", invalid="ignore"):
+                        tt = np.where(dd[:, 1] < 0, -o[s, 1] / dd[:, 1], np.inf)
+                    q = o[s][:, [0, 2]] + dd[:, [0, 2]] * tt[:, None]
+                    out[s] = np.where(np.isfinite(tt)[:, None], (q - p[s][:, [0, 2]]) * inv, 1e6)
         front, back = self._sun(kind, index, p, n, ng)
         self.timing["geometry"] += time.perf_counter() - t0
-        return Hits(o, dirs, kind, index, t, p, n, ng, uv, duv_dx, duv_dy, front, back)
+        return Hits(o, dirs, kind, index, t, p, n, ng, uv, duv_dx, duv_dy, front, back, pixels)
 
     def mirror(self, h: Hits, m: np.ndarray) -> MirrorHits:
         """View/sun geometry of the film samples ``m`` and the hits of their mirror rays."""
@@ -232,16 +245,27 @@ class SetRenderer:
         return MirrorHits(cos_v.astype(np.float32), cos_d.astype(np.float32), nh.astype(np.float32), hits)
 
     def camera_rays(self):
-        """Unit directions and their x/y neighbour directions, each (spp, H·W, 3), for the stratified samples."""
+        """Unit directions and their x/y neighbour directions (one sample spacing right and down; not normalised,
+        which the footprint's plane intersections do not need), each (spp, H·W, 3), for the stratified samples."""
         cam = self.spec.camera
         H, W = cam.height, cam.width
         offs = stratified_offsets(self.spec.spp)
         step = 1.0 / int(np.ceil(np.sqrt(self.spec.spp)))
-        out = []
-        for dx, dy in ((0.0, 0.0), (step, 0.0), (0.0, step)):
-            out.append(np.stack([cam.ray_directions(jitter=np.broadcast_to(off + [dx, dy], (H, W, 2))).reshape(-1, 3)
-                                 for off in offs]))
-        return out
+        right, up, fwd = cam.basis()
+        th = np.tan(np.radians(cam.fov) / 2)
+        ex = right * (2 * th * (W / H) / W * step)
+        ey = -up * (2 * th / H * step)
+        d, dx, dy = [], [], []
+        for off in offs:
+            jj, ii = np.meshgrid(np.arange(W) + 0.5 + off[0], np.arange(H) + 0.5 + off[1])
+            x = ((2 * jj / W - 1) * th * (W / H)).reshape(-1, 1)
+            y = ((1 - 2 * ii / H) * th).reshape(-1, 1)
+            D = x * right + y * up + fwd
+            L = np.linalg.norm(D, axis=-1, keepdims=True)
+            d.append(D / L)
+            dx.append((D + ex) / L)
+            dy.append((D + ey) / L)
+        return np.stack(d), np.stack(dx), np.stack(dy)
 
     def blocks(self, block_rays: int = 1 << 17):
         """Yield (pixel slice, dirs, ddx, ddy), the directions (spp·n, 3) sample-major, over blocks of pixels."""
@@ -261,20 +285,53 @@ class SetRenderer:
         out = np.zeros((sel.size, 3), np.float32)
         kind, index = h.kind[sel], h.index[sel]
         spec = self.spec
-
-        def look(tex, k):
-            uv = h.uv[sel[k]]
-            if coarse or h.duv_dx is None:
-                return tex.trilinear(uv, np.full(uv.shape[0], max(tex.max_level - 4, 0)))[:, :3]
-            return tex.filtered(uv, h.duv_dx[sel[k]], h.duv_dy[sel[k]], spec.max_aniso)[:, :3]
-
         g = kind == KIND_GROUND
         if g.any() and spec.ground is not None:
-            out[g] = look(spec.ground.texture, g)
+            if coarse or h.duv_dx is None or not h.pixels or spec.spp == 1:
+                out[g] = self.texture_lookup(spec.ground.texture, h, sel[g], coarse)[:, :3]
+            else:
+                out[g] = self._ground_per_pixel(h, sel[g])
         for i, s in enumerate(spec.surfaces):
             k = (kind == KIND_SURFACE) & (index == i)
             if k.any():
-                out[k] = look(s.texture, k) if s.texture is not None else self.surface_color[i]
+                out[k] = self.texture_lookup(s.texture, h, sel[k], coarse)[:, :3] if s.texture is not None \
+                    else self.surface_color[i]
+        return out
+
+    def texture_lookup(self, tex, h: Hits, idx: np.ndarray, coarse: bool = False) -> np.ndarray:
+        """Filtered lookup of ``tex`` (any channels) for samples ``idx`` over their footprints (``coarse`` or no
+        footprint: the texture's level ``max_level - 4``, for secondary rays)."""
+        uv = h.uv[idx]
+        if coarse or h.duv_dx is None:
+            return tex.trilinear(uv, np.full(uv.shape[0], max(tex.max_level - 4, 0)))
+        return tex.filtered(uv, h.duv_dx[idx], h.duv_dy[idx], self.spec.max_aniso)
+
+    def _ground_per_pixel(self, h: Hits, gs: np.ndarray) -> np.ndarray:
+        """Ground albedo of samples ``gs`` filtered once per pixel where every sample of the pixel sees the
+        ground (multisample-style: one lookup at the samples' mean (u, v) over the whole pixel's footprint,
+        k = ceil(sqrt(spp)) sample spacings), per sample elsewhere (pixels at an object's edge)."""
+        P, spp = h.pixels, self.spec.spp
+        tex = self.spec.ground.texture
+        pix = gs % P
+        full = np.bincount(pix, minlength=P) == spp
+        out = np.empty((gs.size, 3), np.float32)
+        per = full[pix]
+        if per.any():
+            fp = np.flatnonzero(full)
+            w = np.float64(1.0 / spp)
+            g_in = gs[per]
+            p_in = pix[per]
+            uv = np.stack([np.bincount(p_in, weights=h.uv[g_in, c], minlength=P)[fp] for c in (0, 1)], -1) * w
+            k = float(np.ceil(np.sqrt(spp)))
+            dx = np.stack([np.bincount(p_in, weights=h.duv_dx[g_in, c], minlength=P)[fp] for c in (0, 1)], -1) * w * k
+            dy = np.stack([np.bincount(p_in, weights=h.duv_dy[g_in, c], minlength=P)[fp] for c in (0, 1)], -1) * w * k
+            vals = tex.filtered(uv, dx, dy, self.spec.max_aniso)[:, :3]
+            slot = np.full(P, -1, np.int64)
+            slot[fp] = np.arange(fp.size)
+            out[per] = vals[slot[p_in]]
+        if (~per).any():
+            e = gs[~per]
+            out[~per] = tex.filtered(h.uv[e], h.duv_dx[e], h.duv_dy[e], self.spec.max_aniso)[:, :3]
         return out
 
     def irradiance_rgb(self, h: Hits, sel: np.ndarray) -> np.ndarray:
@@ -297,14 +354,25 @@ class SetRenderer:
         tc = (h.t[sel] / at.reference_distance).astype(np.float32)
         return np.exp(-np.asarray(at.kappa, np.float32)[None] * tc[:, None])
 
+    def hazy(self, h: Hits, sel: np.ndarray) -> np.ndarray:
+        """Which samples ``sel`` are far enough for the haze to matter: 1 - e^{-κ t / d_ref} >= ``HAZE_MIN`` in
+        some channel (nearer ones keep their radiance, changed by less than 1e-4 of the sky-minus-surface
+        difference)."""
+        at = self.spec.atmosphere
+        return h.t[sel] * float(np.max(at.kappa)) / at.reference_distance >= HAZE_MIN
+
     def aerial(self, L: np.ndarray, h: Hits, sel: np.ndarray) -> np.ndarray:
         """Dobashi Eq. 3 over the samples ``sel``: L e^{-κ t} + (1 - e^{-κ t}) L_sky(direction)."""
         at = self.spec.atmosphere
         if at is None:
             return L
         from natscene.scatter.compose import apply_atmosphere
-        return apply_atmosphere(L, (h.t[sel] / at.reference_distance).astype(np.float32), at.kappa,
-                                self.dome.radiance(h.dirs[sel]))
+        far = self.hazy(h, sel)
+        if far.any():
+            f = sel[far]
+            L[far] = apply_atmosphere(L[far], (h.t[f] / at.reference_distance).astype(np.float32), at.kappa,
+                                      self.dome.radiance(h.dirs[f]))
+        return L
 
     def radiance_rgb(self, h: Hits, sel: np.ndarray, coarse: bool = False) -> np.ndarray:
         """RGB radiance arriving along rays ``sel`` that hit ground or RGB surfaces (aerial perspective included)."""
@@ -397,7 +465,7 @@ class SetRenderer:
         plate = spec.plate.reshape(-1, 3).astype(np.float32)
         origin = np.asarray(spec.camera.position, np.float64)
         for sl, dirs, ddx, ddy in self.blocks():
-            h = self.trace(origin, dirs, ddx, ddy)
+            h = self.trace(origin, dirs, ddx, ddy, pixels=sl.stop - sl.start)
             n = sl.stop - sl.start
             out = np.zeros((dirs.shape[0], 3), np.float32)
             bg = h.kind == KIND_SKY

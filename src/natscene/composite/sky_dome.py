@@ -21,11 +21,11 @@ _A_HAT = np.array([np.pi] + [2 * np.pi / 3] * 3 + [np.pi / 4] * 5)
 
 
 def sh9(dirs: np.ndarray) -> np.ndarray:
-    """The nine real spherical harmonics (order <= 2) at unit directions (M, 3) -> (M, 9)."""
+    """The nine real spherical harmonics (order <= 2) at unit directions (M, 3) -> (M, 9), in their dtype."""
     x, y, z = dirs[:, 0], dirs[:, 1], dirs[:, 2]
-    return np.stack([np.full_like(x, 0.282095), 0.488603 * y, 0.488603 * z, 0.488603 * x,
-                     1.092548 * x * y, 1.092548 * y * z, 0.315392 * (3 * z * z - 1), 1.092548 * x * z,
-                     0.546274 * (x * x - y * y)], -1)
+    c = [dirs.dtype.type(v) for v in (0.282095, 0.488603, 1.092548, 0.315392, 0.546274, 3.0, 1.0)]
+    return np.stack([np.full_like(x, c[0]), c[1] * y, c[1] * z, c[1] * x, c[2] * x * y, c[2] * y * z,
+                     c[3] * (c[5] * z * z - c[6]), c[2] * x * z, c[4] * (x * x - y * y)], -1)
 
 
 def sphere_quadrature(n_theta: int = 64, n_phi: int = 128) -> tuple[np.ndarray, np.ndarray]:
@@ -65,11 +65,21 @@ def shot_sky(settings: dict, sun_dir) -> Callable[[np.ndarray], np.ndarray]:
 
 
 class SkyDome:
-    """Sky radiance above the horizon, the ground's bounce below it, and the SH9 irradiance of both."""
+    """Sky radiance above the horizon, the ground's bounce below it, and the SH9 irradiance of both.
+
+    ``radiance`` looks the sky up in a latitude-longitude table of ``table`` (rows, columns) built once
+    (bilinear; 0.5° steps by default, finer than the sky models' features), so that per-sample haze and mirror
+    rays cost a table lookup instead of the model's exponentials."""
 
     def __init__(self, sky: Callable[[np.ndarray], np.ndarray], sun_dir, sun_rgb, ground_albedo,
-                 quadrature=(64, 128)):
+                 quadrature=(64, 128), table=(361, 720)):
         self.sky = sky
+        nr, nc = table
+        el = np.linspace(-np.pi / 2, np.pi / 2, nr)
+        az = np.linspace(-np.pi, np.pi, nc)
+        E, A = np.meshgrid(el, az, indexing="ij")
+        dt = np.stack([np.cos(E) * np.sin(A), np.sin(E), np.cos(E) * np.cos(A)], -1).reshape(-1, 3)
+        self._table = np.asarray(sky(dt), np.float32).reshape(nr, nc, 3)
         d, w = sphere_quadrature(*quadrature)
         Y = sh9(d)
         up = d[:, 1] > 0
@@ -90,8 +100,26 @@ class SkyDome:
 
     def irradiance(self, normals: np.ndarray) -> np.ndarray:
         """Irradiance (M, 3) of surfaces with unit ``normals`` (M, 3) from sky and ground (no sun), clipped >= 0."""
-        return np.maximum(self._eval(self.coef, normals), 0.0).astype(np.float32)
+        n = np.asarray(normals, np.float32)
+        return np.maximum(sh9(n) @ (_A_HAT[:, None] * self.coef).astype(np.float32), 0.0)
 
     def radiance(self, dirs: np.ndarray) -> np.ndarray:
-        """Sky radiance toward ``dirs`` (M, 3) (the model's horizon colour continues below it)."""
-        return np.asarray(self.sky(np.asarray(dirs)), np.float32)
+        """Sky radiance toward unit ``dirs`` (M, 3) (the model's horizon colour continues below it), from the
+        table."""
+        return lookup_table(self._table, dirs)
+
+
+def lookup_table(table: np.ndarray, dirs: np.ndarray) -> np.ndarray:
+    """Bilinear lookup (M, C) of a latitude-longitude table (rows: elevation -90..90°, columns: azimuth
+    -180..180° from +z toward +x) toward unit ``dirs`` (M, 3)."""
+    d = np.asarray(dirs, np.float32)
+    nr, nc = table.shape[:2]
+    y = (np.arcsin(np.clip(d[:, 1], -1, 1)) / np.float32(np.pi) + np.float32(0.5)) * (nr - 1)
+    x = (np.arctan2(d[:, 0], d[:, 2]) / np.float32(2 * np.pi) + np.float32(0.5)) * (nc - 1)
+    y0 = np.clip(np.floor(y).astype(np.int64), 0, nr - 2)
+    x0 = np.clip(np.floor(x).astype(np.int64), 0, nc - 2)
+    fy = (y - y0)[:, None]
+    fx = (x - x0)[:, None]
+    top = table[y0, x0] * (1 - fx) + table[y0, x0 + 1] * fx
+    bot = table[y0 + 1, x0] * (1 - fx) + table[y0 + 1, x0 + 1] * fx
+    return (top * (1 - fy) + bot * fy).astype(np.float32)

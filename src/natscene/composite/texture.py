@@ -5,7 +5,8 @@ direction only; a point sample there aliases (moiré on a regular texture, spark
 filters over the footprint of the sample in texture space, given by the derivatives of (u, v) across one
 sample spacing (:mod:`natscene.composite.footprint`):
 
-- pyramid: level 0 is the texture, level k+1 the 2×2 box average of level k (odd sizes: area resampling);
+- pyramid: level 0 is the texture, level k+1 the 2×2 box average of level k (odd sizes: exact area
+  resampling to half the size, rounded up);
 - footprint: the Jacobian J = [[∂u/∂x, ∂u/∂y], [∂v/∂x, ∂v/∂y]] in texels; its singular values are the
   ellipse's major and minor radii σ₁ ≥ σ₂, the first left singular vector its major axis e;
 - Feline-style probes (McCormack, Perry, Farkas & Jouppi 1999, "Feline: fast elliptical lines for anisotropic
@@ -22,11 +23,24 @@ takes one point per call, so the renderer uses this vectorised lookup and the te
 """
 from __future__ import annotations
 
-import cv2
 import numpy as np
 
 #: length of the line of probes, in units of the footprint's major radius σ₁ (see the module docstring)
 SPAN = 1.5
+
+
+def _area_halve(a: np.ndarray, axis: int) -> np.ndarray:
+    """Area resampling of ``a`` along ``axis`` to ceil(n / 2) samples (each the exact mean of the input over its
+    interval, from the running integral; the texture's mean is kept)."""
+    n = a.shape[axis]
+    m = max(1, (n + 1) // 2)
+    a = np.moveaxis(a, axis, 0)
+    I = np.concatenate([np.zeros((1,) + a.shape[1:]), np.cumsum(a, 0)])
+    x = np.linspace(0.0, n, m + 1)
+    i = np.minimum(np.floor(x).astype(np.int64), n - 1)
+    f = (x - i).reshape((-1,) + (1,) * (a.ndim - 1))
+    at = I[i] + f * a[i]  # the integral at the interval ends
+    return np.moveaxis((at[1:] - at[:-1]) * (m / n), 0, axis)
 
 
 class MipTexture:
@@ -45,8 +59,7 @@ class MipTexture:
             if h % 2 == 0 and w % 2 == 0:
                 b = 0.25 * (a[0::2, 0::2] + a[1::2, 0::2] + a[0::2, 1::2] + a[1::2, 1::2])
             else:
-                b = cv2.resize(a, (max(1, (w + 1) // 2), max(1, (h + 1) // 2)), interpolation=cv2.INTER_AREA)
-                b = b.reshape(b.shape[0], b.shape[1], -1)
+                b = _area_halve(_area_halve(a.astype(np.float64), 0), 1)
             levels.append(b.astype(np.float32))
         self.levels = levels
         self.heights = np.array([l.shape[0] for l in levels], np.int64)
@@ -68,11 +81,13 @@ class MipTexture:
         w = self.widths[level]
         h = self.heights[level]
         off = self.offsets[level]
-        x = uv[:, 0] * w - 0.5
-        y = (1.0 - uv[:, 1]) * h - 0.5
+        u = uv[:, 0] - np.floor(uv[:, 0]) if self.wrap else uv[:, 0]  # wrap first: float32 keeps texel precision
+        v = uv[:, 1] - np.floor(uv[:, 1]) if self.wrap else uv[:, 1]
+        x = u.astype(np.float32) * w.astype(np.float32) - np.float32(0.5)
+        y = (np.float32(1.0) - v.astype(np.float32)) * h.astype(np.float32) - np.float32(0.5)
         xf, yf = np.floor(x), np.floor(y)
-        fx = (x - xf).astype(np.float32)[:, None]
-        fy = (y - yf).astype(np.float32)[:, None]
+        fx = (x - xf)[:, None]
+        fy = (y - yf)[:, None]
         x0, y0 = xf.astype(np.int64), yf.astype(np.int64)
         if self.wrap:
             x0 %= w
