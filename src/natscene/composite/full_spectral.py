@@ -123,7 +123,8 @@ def render_full_spectral(renderer: SetRenderer) -> tuple[np.ndarray, np.ndarray]
                 L_env[surf] = _radiance(r, inp, m, surf, coarse=True)
             s = r.film_spectra(h, fm, mh, L_env, highlight_spectra=inp.highlight)[0]
             if inp.kappa is not None:
-                T = np.exp(-inp.kappa[None] * (h.t[fm] / spec.atmosphere.reference_distance)[:, None]).astype(np.float32)
+                tc = h.t[fm] / spec.atmosphere.reference_distance
+                T = np.exp(-inp.kappa[None] * tc[:, None]).astype(np.float32)
                 s = s * T + (1 - T) * inp.sky(h.dirs[fm])
             out[fm] = s
         S[sl] = out.reshape(spp, n, N).sum(0)

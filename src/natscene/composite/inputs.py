@@ -126,7 +126,8 @@ def reference_distance(camera_position, volume_meta: str) -> float:
         vol = SimpleNamespace(bbox_min=np.asarray(meta["bbox_min"], np.float64),
                               bbox_max=np.asarray(meta["bbox_max"], np.float64))
     except (TypeError, KeyError) as e:
-        raise InputError(f"{volume_meta}: no bbox_min/bbox_max (expected the volume stage's meta.yaml); {e!r}") from None
+        raise InputError(f"{volume_meta}: no bbox_min/bbox_max (expected the volume stage's meta.yaml); "
+                         f"{e!r}") from None
     return ref(SimpleNamespace(position=np.asarray(camera_position, np.float64)), vol)
 
 
@@ -147,8 +148,8 @@ def build_set(entry: dict, frame: int, results: str, root: str, shot_cfg: dict |
                      tuple(c["up"]), c["fov"], int(W), int(H))
         plate = read_photo(f["plate"])[..., :3].astype(np.float64)
         if plate.shape[:2] != (H, W):
-            raise InputError(f"{f['plate']}: {plate.shape[1]}x{plate.shape[0]}, but shots.{entry['shot']}.resolution is "
-                             f"{W}x{H}; re-run render_frame")
+            raise InputError(f"{f['plate']}: {plate.shape[1]}x{plate.shape[0]}, but shots.{entry['shot']}.resolution "
+                             f"is {W}x{H}; re-run render_frame")
         sun_cfg.update(azimuth=st["azimuth"], elevation=st["elevation"], c_in=st["c_in"])
         if sun_cfg.get("intensity") is None:
             sun_cfg["intensity"] = st["L_in"]

@@ -164,6 +164,13 @@ def leaf_mesh(texture_alpha: np.ndarray, length: float, curl: float = 0.25, cup:
     return m.keep_faces(texture_alpha if texture_alpha.ndim == 1 else cell_keep(m, texture_alpha))
 
 
+def leaf_cells(alpha: np.ndarray, n: int = 14) -> np.ndarray:
+    """The face mask of :func:`leaf_mesh`'s n x n grid that keeps the cells holding any of ``alpha`` (the same
+    for every leaf cut from one texture: compute it once, pass it as ``texture_alpha``)."""
+    full = leaf_mesh(np.ones((1,), bool).repeat(2 * (n - 1) ** 2), 1.0, 0.0, 0.0, n)
+    return cell_keep(full, alpha)
+
+
 def drop_transparent_cells(m: TriMesh, alpha: np.ndarray, threshold: float = 0.02) -> TriMesh:
     """Remove faces whose texture-space bounding box holds no alpha above ``threshold`` (the alpha test still
     cuts the exact outline; this only spares the ray caster empty triangles)."""

@@ -17,11 +17,11 @@ import numpy as np
 
 from natscene.composite.beetle import GOLD_BUG, JEWEL_BEETLE, BeetleShape, beetle_meshes
 from natscene.composite.flower import PetalShape, PetalTexture, flower
-from natscene.composite.maple import cell_keep, leaf_mesh
+from natscene.composite.maple import leaf_cells, leaf_mesh
 from natscene.composite.grass import grass_blades
 from natscene.composite.mesh import merge, rotation_axis, rotation_y
 from natscene.composite.placement import patch_points, wedge_points
-from natscene.composite.set_spec import Film, Shape, Surface
+from natscene.composite.set_spec import Shape, Surface
 from natscene.composite.texture import MipTexture
 
 STEM_RGB = (0.07, 0.16, 0.03)
@@ -102,7 +102,7 @@ def build_meadow(cfg: dict, petal_textures: dict, leaf_textures: list, films: li
         mats = [surface(name=f"leaf:{i}", texture=MipTexture(t), cutout=True,
                         translucency=float(lv.get("translucency", 0.25))) for i, t in enumerate(leaf_textures)]
         per = [[] for _ in leaf_textures]
-        keep = [cell_keep(leaf_mesh(np.ones((2, 2)), 1.0, 0.0, 0.0), t[..., 3]) for t in leaf_textures]
+        keep = [leaf_cells(t[..., 3]) for t in leaf_textures]
         for i in range(n):
             L = _uniform(rng, lv.get("length", [0.09, 0.15]))
             m = leaf_mesh(keep[which[i]], L, curl=_uniform(rng, [0.1, 0.35]),
