@@ -9,15 +9,15 @@ import numpy as np
 from natscene.color import linear_srgb_to_lab
 from natscene.composite.full_spectral import render_full_spectral
 from natscene.composite.inputs import build_set, sun_c_in_from_product
-from natscene.composite.scene import SetRenderer, spectral_coverage
+from natscene.composite.renderer import SetRenderer, spectral_coverage
 from natscene.io import auto_exposure, write_exr, write_png, write_yaml
 from natscene.runner import run
 
 
 def main(snakemake, log):
-    entry = snakemake.params.entry
+    entry, shot = snakemake.params.entry, snakemake.params.shot
     frame = int(snakemake.wildcards.frame)
-    spec = build_set(entry, frame, snakemake.params.results, snakemake.params.root,
+    spec = build_set(entry, frame, snakemake.params.results, snakemake.params.root, shot,
                      sun_c_in_from_product(entry, snakemake.params.results))
     r = SetRenderer(spec)
     r.render_hybrid()  # warm-up (kernel compilation), so the two timings below compare like with like
@@ -43,7 +43,7 @@ def main(snakemake, log):
               {"composite": snakemake.wildcards.name, "frame": frame, **{k: v for k, v in stats.items()
                                                                         if not isinstance(v, dict)}},
               stage="composite_reference")
-    e = auto_exposure(np.concatenate([final, ref], 1))
+    e = shot["exposure"] if shot else auto_exposure(np.concatenate([final, ref], 1))
     heat = np.stack([np.clip(de / 2, 0, 1), np.clip(1 - np.abs(de - 1), 0, 1) * 0.6, np.clip(1 - de, 0, 1) * 0.3],
                     -1) / e  # dE 0 dark blue-green, 1 yellow-green, >= 2 red (linear, shown at the same exposure)
     write_png(snakemake.output.png, np.concatenate([final, ref, heat.astype(np.float32)], 1), exposure=e)

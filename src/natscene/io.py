@@ -394,3 +394,35 @@ def write_png(path: str | os.PathLike, image: np.ndarray, exposure: float | str 
 def read_image_u8(path: str | os.PathLike) -> np.ndarray:
     """Read an 8-bit image (PNG/JPEG) as stored, uint8 (H, W, C), no colour decoding."""
     return _read_pixels(Path(path), "image", oiio.UINT8)[0]
+
+
+# ---------------------------------------------------------------------------------------- textures
+def texture_lookup_reference(pixels: np.ndarray, uv: np.ndarray, duv_dx: np.ndarray, duv_dy: np.ndarray,
+                             wrap: bool = True, max_aniso: int = 16) -> np.ndarray:
+    """Filtered lookups of an image through OpenImageIO's ``TextureSystem`` (a mip-mapped texture made with
+    ``make_texture``, anisotropic filtering, bilinear texel interpolation, periodic or clamped wrap): (M, C) for (u, v) points with v up and
+    their footprint derivatives (M, 2). OIIO's Python binding takes one point per call, so this is a reference
+    for tests and spot checks, not for rendering (natscene.composite.texture filters whole frames)."""
+    a = _as_hwc(np.asarray(pixels, np.float32))
+    with tempfile.TemporaryDirectory() as d:
+        src, tx = os.path.join(d, "src.exr"), os.path.join(d, "tex.tx")
+        spec = oiio.ImageSpec(a.shape[1], a.shape[0], a.shape[2], oiio.FLOAT)
+        buf = oiio.ImageBuf(spec)
+        buf.set_pixels(oiio.ROI(), np.ascontiguousarray(a))
+        if not buf.write(src):
+            raise OSError(f"cannot write {src}: {buf.geterror()}")
+        if not oiio.ImageBufAlgo.make_texture(oiio.MakeTxTexture, src, tx, oiio.ImageSpec()):
+            raise OSError(f"make_texture failed: {oiio.geterror()}")
+        ts = oiio.TextureSystem(False)
+        opt = oiio.TextureOpt()
+        w = oiio.Wrap.Periodic if wrap else oiio.Wrap.Clamp
+        opt.swrap, opt.twrap = w, w
+        opt.mipmode = oiio.MipMode.Aniso
+        opt.interpmode = oiio.InterpMode.Bilinear
+        opt.anisotropic = int(max_aniso)
+        uv, dx, dy = (np.asarray(x, np.float64).reshape(-1, 2) for x in (uv, duv_dx, duv_dy))
+        out = np.array([ts.texture(tx, opt, float(p[0]), float(1.0 - p[1]), float(ddx[0]), float(-ddx[1]),
+                                   float(ddy[0]), float(-ddy[1]), a.shape[2]) for p, ddx, ddy in zip(uv, dx, dy)],
+                       np.float32)
+        ts.close_all()
+        return out.reshape(-1, a.shape[2])

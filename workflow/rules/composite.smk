@@ -1,22 +1,22 @@
 # Stage: final hybrid RGB + spectral compositing (Dong 2007 Ch. 2; thin films §1.1.6)
-# Inputs are named per composite in config `composite.<name>`: background (e.g. the shot's cloud frames,
-# {product: shots/<shot>/frames/{frame:04d}.exr}), the sun (optionally the shot's frame state), ground texture
-# (tiles product), leaf/petal textures (patterns / leaves products), thin-film objects.
+# A composite names a shot (`composite.<name>.shot`): frame k is seen by frame k's camera in front of frame k's
+# cloud plate, lit by its sun and sky (the frame state shots/<shot>/params/<frame>.yaml, the shot's sky and
+# resolution, the shot volume's meta.yaml for the haze distance). The meadow reads the ground texture (tiles
+# product), the petal pattern maps (patterns/<pattern>/color.exr) and the season leaves (leaves products).
 # `composite` writes the hybrid image, the final image and its PNG; `composite_reference` (entries with
 # reference: true) the full-spectral render of the same rays, a comparison strip and the timings.
-from natscene.composite.inputs import image_files as _composite_image_files
-from natscene.composite.inputs import sun_files as _composite_sun_files
+from natscene.composite.inputs import input_files as _composite_input_files
+
+
+def _composite_shot(wc):
+    shot = config["composite"][wc.name].get("shot")
+    if shot and shot not in config.get("shots", {}):
+        raise ValueError(f"config composite.{wc.name}.shot: {shot!r} is not in 'shots'")
+    return config["shots"][shot] if shot else None
 
 
 def _composite_inputs(wc):
-    entry = config["composite"][wc.name]
-    frame = int(wc.frame)
-    files = _composite_image_files(entry["background"], frame, RESULTS, str(ROOT))
-    files += _composite_image_files(entry["ground"]["texture"], frame, RESULTS, str(ROOT))
-    for leaf in entry.get("leaves", []):
-        files += _composite_image_files(leaf["texture"], frame, RESULTS, str(ROOT))
-    files += _composite_sun_files(entry, frame, RESULTS)
-    return files
+    return _composite_input_files(config["composite"][wc.name], int(wc.frame), RESULTS, str(ROOT), _composite_shot(wc))
 
 
 rule composite:
@@ -31,6 +31,7 @@ rule composite:
         frame=r"\d{4}",
     params:
         entry=lambda wc: config["composite"][wc.name],
+        shot=_composite_shot,
         results=RESULTS,
         root=str(ROOT),
         code=script_fingerprint("composite.py"),
@@ -56,6 +57,7 @@ rule composite_reference:
         frame=r"\d{4}",
     params:
         entry=lambda wc: config["composite"][wc.name],
+        shot=_composite_shot,
         results=RESULTS,
         root=str(ROOT),
         code=script_fingerprint("composite_reference.py"),

@@ -1,2 +1,5 @@
-"""Final compositing of a shot (Dong 2007 Ch. 2): hybrid RGB + spectral intermediate image, the Mitsuba
-scene of the set (ground, leaves/petals, thin-film objects) and the full-spectral reference mode."""
+"""The final shot (Dong 2007 Ch. 2): a meadow in front of a shot's cloud frames, shaded with the hybrid RGB +
+spectral rule. One concept per module: ``set_spec`` (what the set holds), ``inputs`` (config -> set),
+``meadow`` / ``placement`` (where things go), ``flower``, ``maple``, ``beetle``, ``grass``, ``mesh`` (geometry),
+``texture`` / ``footprint`` (filtered texturing), ``sky_dome`` (sky radiance and irradiance), ``tracer`` (ray
+casting), ``renderer`` (hybrid shading), ``full_spectral`` (the reference), ``hybrid`` (the intermediate image)."""

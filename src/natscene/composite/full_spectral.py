@@ -2,21 +2,22 @@
 [SFDC01], "which emphasizes real spectra as input, computes full spectra light-object interactions and
 generates spectral images convertible to RGB"): the same set and the same rays as the hybrid renderer, but
 every material, light and pixel is a spectrum on the wavelength grid (default 81 bands) and every
-light-material interaction is a per-band product, on every pixel and every bounce.
+light-material interaction is a per-band product, on every sample and every bounce.
 
-Preprocessing (once per render, timed with it): the RGB inputs become spectral inputs the way a spectral
-renderer's material database holds them, with the same published upsampling as the hybrid
-(:mod:`natscene.spectral.upsampling`): each texel of the ground and leaf textures becomes a reflectance
-spectrum (``rgb_to_reflectance``), each pixel of the background plate and the sky dome's zenith/horizon a
-radiance spectrum (``rgb_to_radiance``); the sun is its SPD. Rendering: textures are looked up as spectra
-(bilinear over 81 bands), shaded as ρ(λ)·(E_sun(λ) cosθ V / π + L_amb(λ) (1 + n_y)/2), film objects as
-R(θ_v, λ) L_env(λ) + R(θ_d, λ) E_sun(λ) lobe + highlight(λ) E_sun(λ) lobe with L_env the *spectral* radiance
-the mirror ray gathers; the pixel spectra are integrated to XYZ -> linear sRGB once at the end (§2.4).
+Preprocessing and rendering (the preprocessing timed with the render): every RGB input becomes spectra with the
+hybrid's published upsampling (:mod:`natscene.spectral.upsampling`), each by the cheaper of two equivalent
+routes (:class:`SpectralInputs`): once per entry (the background plate per pixel, the surfaces' colours, Dong's
+highlight, κ_a as a per-band extinction) or per lookup (texture values filtered in RGB, the sky's radiance and
+the sky dome's irradiance: upsampled per sample; identical for the linear Mallett-Yuksel method). The sun is
+its SPD. Every sample is shaded on the grid as ρ(λ)/π·(E_sun(λ)·cos·V + E_sky(n, λ)) (+ translucency), hazed
+by e^{−κ(λ)t} toward L_sky(λ), films as R(θ_v, λ)·L_env(λ) + (R(θ_d, λ) + highlight(λ))·E_sun(λ)·lobe with
+L_env the *spectral* radiance the mirror ray gathers; the pixel spectra are integrated to XYZ -> linear sRGB
+once at the end (§2.4).
 
-With the Mallett-Yuksel upsampling (linear, exact round trip under D65) the two modes agree exactly under a
-D65 sun and a neutral sky; under coloured light they differ on RGB materials, because a product of two
-upsampled spectra does not integrate to the product of the two RGB triples (Dong's hybrid, which shades RGB
-materials in RGB, has the same property).
+With the Mallett-Yuksel upsampling (linear, exact round trip under D65) the two modes agree under a D65 sun
+and a neutral sky; under coloured light they differ on RGB materials, because a product of two upsampled
+spectra does not integrate to the product of the two RGB triples (Dong's hybrid, which shades RGB materials
+in RGB, has the same property).
 """
 from __future__ import annotations
 
@@ -24,54 +25,72 @@ import time
 
 import numpy as np
 
-from natscene.composite.scene import SetRenderer, sky_ambient_weight, sky_blend
+from natscene.composite.renderer import KIND_FILM, KIND_GROUND, KIND_SKY, KIND_SURFACE, Hits, MirrorHits, SetRenderer
 from natscene.spectral.grid import spectrum_to_rgb_matrix
 from natscene.spectral.upsampling import rgb_to_radiance, rgb_to_reflectance
 
 
-class UpsampleOnLookup:
-    """A texture with more texels than the render has samples: converting every texel up front would cost more
-    than converting each looked-up value, so the spectral renderer does the latter (bilinear RGB lookup, then
-    the upsampling; identical for the linear Mallett-Yuksel method, a close variant for Smits 1999)."""
-
-    def __init__(self, rgb: np.ndarray, grid, method: str):
-        self.rgb, self.grid, self.method = rgb, grid, method
-
-    def lookup(self, uv: np.ndarray, repeat: float = 1.0) -> np.ndarray:
-        from natscene.composite.scene import sample_texture
-        return rgb_to_reflectance(sample_texture(self.rgb, uv, repeat), self.grid, self.method).astype(np.float32)
-
-
-def spectral_texture(rgb: np.ndarray, grid, method: str, n_samples: int):
-    """Per-texel reflectance spectra (h, w, N) when the texture has at most ``n_samples`` texels, else
-    :class:`UpsampleOnLookup` (whichever is cheaper: the fair choice for the reference renderer)."""
-    if rgb.shape[0] * rgb.shape[1] <= n_samples:
-        return rgb_to_reflectance(rgb, grid, method).astype(np.float32)
-    return UpsampleOnLookup(rgb, grid, method)
-
-
 class SpectralInputs:
-    """Spectra of the set's RGB inputs (the spectral renderer's preprocessing): per-texel reflectance spectra of
-    the textures (or upsampling on lookup for textures larger than the render, see :func:`spectral_texture`),
-    per-pixel radiance spectra of the plate, sky and highlight spectra."""
+    """Spectra of the set's RGB inputs (the spectral renderer's preprocessing). Each input takes the cheaper of
+    two equivalent routes (identical results for the linear Mallett-Yuksel method; the fair choice for the
+    reference): spectra per entry once when the input has fewer entries than the render has lookups (the plate
+    per pixel, the surfaces' colours, Dong's highlight, κ_a), else the RGB value upsampled per lookup (the
+    textures, whose filtered lookups are upsampled; the sky table and the sky dome's irradiance, evaluated per
+    sample in RGB and upsampled)."""
 
     def __init__(self, r: SetRenderer):
         spec = r.spec
         g, up = spec.grid, spec.upsampling
-        n = spec.camera.width * spec.camera.height * spec.spp
-        self.ground = spectral_texture(r.ground_rgb, g, up, n)
-        self.leaves = [spectral_texture(t, g, up, n) for t in r.leaf_rgb]
-        self.plate = rgb_to_radiance(spec.background.reshape(-1, 3), g, up).astype(np.float32)
-        self.zenith = rgb_to_radiance(np.asarray(spec.sky_zenith, np.float64), g, up).astype(np.float32)
-        self.horizon = rgb_to_radiance(np.asarray(spec.sky_horizon, np.float64), g, up).astype(np.float32)
-        w = sky_ambient_weight()
-        self.ambient = (self.horizon * (1 - w) + self.zenith * w).astype(np.float32)
-        self.highlight = [rgb_to_reflectance(np.asarray(o.highlight_rgb, np.float64), g, up).astype(np.float32)
-                          for o in spec.objects]
+        self.grid, self.method = g, up
+        self.plate = rgb_to_radiance(spec.plate.reshape(-1, 3), g, up).astype(np.float32)
+        self.surface = rgb_to_reflectance(np.asarray(r.surface_color, np.float64).reshape(-1, 3), g, up) \
+            .astype(np.float32).reshape(-1, g.size)
+        self.highlight = [rgb_to_reflectance(np.asarray(f.highlight_rgb, np.float64), g, up).astype(np.float32)
+                          for f in spec.films]
+        at = spec.atmosphere
+        self.kappa = None if at is None else rgb_to_reflectance(np.asarray(at.kappa, np.float64), g, up)
+        self._dome = r.dome
+
+    def irradiance(self, normals: np.ndarray) -> np.ndarray:
+        """Spectral sky-dome irradiance (M, N): the dome's irradiance toward each normal, upsampled."""
+        return rgb_to_radiance(self._dome.irradiance(normals), self.grid, self.method).astype(np.float32)
+
+    def sky(self, dirs: np.ndarray) -> np.ndarray:
+        """Spectral sky radiance (M, N) toward ``dirs``, upsampled from the sky table's RGB."""
+        return rgb_to_radiance(self._dome.radiance(dirs), self.grid, self.method).astype(np.float32)
 
 
-def _radiance(rho, sun_S, amb_S, sun_cos, ambient):
-    return rho * (sun_S[None] / np.float32(np.pi) * sun_cos[:, None] + amb_S[None] * ambient[:, None])
+def _albedo(r: SetRenderer, inp: SpectralInputs, h: Hits, sel: np.ndarray, coarse: bool) -> np.ndarray:
+    """Reflectance spectra (len(sel), N) of ground/surface samples: filtered RGB lookups upsampled, the
+    untextured surfaces' own spectra."""
+    rho = rgb_to_reflectance(r.albedo_rgb(h, sel, coarse), inp.grid, inp.method).astype(np.float32)
+    kind, index = h.kind[sel], h.index[sel]
+    for i, s in enumerate(r.spec.surfaces):
+        if s.texture is None:
+            k = (kind == KIND_SURFACE) & (index == i)
+            rho[k] = inp.surface[i]
+    return rho
+
+
+def _radiance(r: SetRenderer, inp: SpectralInputs, h: Hits, sel: np.ndarray, coarse: bool = False) -> np.ndarray:
+    """Spectral radiance (len(sel), N) of ground/surface samples, aerial perspective included."""
+    rho = _albedo(r, inp, h, sel, coarse)
+    surf = (h.kind[sel] == KIND_SURFACE)
+    n = h.n[sel]
+    E = r.sun_S[None] * h.sun_front[sel, None] + inp.irradiance(n)
+    tr = np.where(surf, r.translucency[np.where(surf, h.index[sel], -1)], 0.0)
+    back = np.flatnonzero(tr > 0)
+    if back.size:
+        E[back] += tr[back, None] * (r.sun_S[None] * h.sun_back[sel[back], None] + inp.irradiance(-n[back]))
+    L = rho / np.float32(np.pi) * E
+    if inp.kappa is not None:
+        at = r.spec.atmosphere
+        far = r.hazy(h, sel)
+        if far.any():
+            f = sel[far]
+            T = np.exp(-inp.kappa[None] * (h.t[f] / at.reference_distance)[:, None]).astype(np.float32)
+            L[far] = L[far] * T + (1 - T) * inp.sky(h.dirs[f])
+    return L
 
 
 def render_full_spectral(renderer: SetRenderer) -> tuple[np.ndarray, np.ndarray]:
@@ -83,29 +102,31 @@ def render_full_spectral(renderer: SetRenderer) -> tuple[np.ndarray, np.ndarray]
     t_start = time.perf_counter()
     inp = SpectralInputs(r)
     r.timing["preprocess"] = time.perf_counter() - t_start
-    sun_S = r.sun_S
     S = np.zeros((H * W, N), np.float32)
     spp = spec.spp
-    for sl, dirs in r.blocks(block_rays=max(spp, (1 << 24) // (4 * N))):  # (rays x N) float32 <= 16 MB
-        h = r.trace(dirs)
-        fm = h.kind == 2
-        mh = r.mirror(h, fm) if fm.any() else None
+    origin = np.asarray(spec.camera.position, np.float64)
+    for sl, dirs, ddx, ddy in r.blocks(block_rays=max(spp, (1 << 24) // (4 * N))):  # (rays x N) float32 <= 16 MB
+        h = r.trace(origin, dirs, ddx, ddy, pixels=sl.stop - sl.start)
         n = sl.stop - sl.start
         out = np.zeros((dirs.shape[0], N), np.float32)
-        bg = h.kind < 0
+        bg = h.kind == KIND_SKY
         out[bg] = np.tile(inp.plate[sl], (spp, 1))[bg]
-        rm = (h.kind == 0) | (h.kind == 1)
-        rho = r.albedo(h.kind[rm], h.index[rm], h.uv[rm], inp.ground, inp.leaves)
-        out[rm] = _radiance(rho, sun_S, inp.ambient, h.sun_cos[rm], h.ambient[rm])
-        if mh is not None:
-            # spectral radiance gathered by the mirror rays: the sky dome's spectra or a spectral surface
-            t = sky_blend(mh.refl)
-            L_env = inp.horizon[None] * (1 - t) + inp.zenith[None] * t
-            surf = (mh.kind == 0) | (mh.kind == 1)
-            if surf.any():
-                rho2 = r.albedo(mh.kind[surf], mh.index[surf], mh.uv[surf], inp.ground, inp.leaves)
-                L_env[surf] = _radiance(rho2, sun_S, inp.ambient, mh.sun_cos[surf], mh.ambient[surf])
-            out[fm] = r.film_spectra(h, fm, mh, L_env, highlight_spectra=inp.highlight)[0]
+        rm = np.flatnonzero((h.kind == KIND_GROUND) | (h.kind == KIND_SURFACE))
+        out[rm] = _radiance(r, inp, h, rm)
+        fm = np.flatnonzero(h.kind == KIND_FILM)
+        if fm.size:
+            mh: MirrorHits = r.mirror(h, fm)
+            m = mh.hits
+            L_env = inp.sky(m.dirs)
+            surf = np.flatnonzero((m.kind == KIND_GROUND) | (m.kind == KIND_SURFACE))
+            if surf.size:
+                L_env[surf] = _radiance(r, inp, m, surf, coarse=True)
+            s = r.film_spectra(h, fm, mh, L_env, highlight_spectra=inp.highlight)[0]
+            if inp.kappa is not None:
+                tc = h.t[fm] / spec.atmosphere.reference_distance
+                T = np.exp(-inp.kappa[None] * tc[:, None]).astype(np.float32)
+                s = s * T + (1 - T) * inp.sky(h.dirs[fm])
+            out[fm] = s
         S[sl] = out.reshape(spp, n, N).sum(0)
     S *= np.float32(1.0 / spp)
     rgb = (S @ spectrum_to_rgb_matrix(spec.grid).astype(np.float32)).reshape(H, W, 3)
