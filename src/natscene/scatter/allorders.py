@@ -1,0 +1,201 @@
+"""The all-orders transport: every scattering order of the sun's light and the skylight, per pixel, by bands.
+
+Dobashi 2012 truncates multiple scattering at order 4 and adds a constant ambient term L_amb (§3); his §7
+names both limits and the remedy (order bands after Bouthors et al. 2008, the skylight as a light source).
+For one view (camera + sun), one sigma_t and one g this module computes, with photon tracing
+(:mod:`.photons`) into an in-scatter cache gathered along the view rays (:mod:`.inscatter`):
+
+- ``sun`` (B_sun, H, W): the light of each band of orders >= 2 of the sun's multiple scattering, per unit
+  sun irradiance and without the albedo (order 1 is the ray-marched S_sun of Eq. 5);
+- ``sky`` (4, B_sky, H, W): the light of each band of orders >= 1 of the skylight, without the albedo, for
+  the dome's R, G, B radiance distributions and a unit-radiance ground (lower hemisphere);
+- the bands' geometric ratios (:func:`natscene.scatter.bands.fit_ratios`), so that any albedo composes in
+  closed form (:func:`natscene.scatter.bands.band_weights`);
+- a noise estimate: the photons are traced as two independent halves, and the images of the halves give
+  each pixel's standard error (the cache and the gather are linear in the tallies, so the mean of the two
+  halves is exactly the result of tracing them together).
+
+Low orders vary over a mean free path near the lit surface and are cached in cells of ``fine_voxels``;
+bands from order 5 on are smooth (they have diffused over several transport mean free paths) and use
+cells of ``coarse_voxels``. Each cache is smoothed along the surface seen by the camera (a cross-bilateral
+kernel guided by the cells' optical depth toward the camera, :func:`natscene.scatter.inscatter.cache_radiance`).
+
+Effort goes where the variance is: the number of photons is set from a collision budget (a short pilot run
+measures the collisions per photon at this sigma_t, g), because the noise of a cell falls with the
+collisions in it, and a thin cloud (sigma_t = 0.1) makes five times fewer collisions per photon than a
+thick one (sigma_t = 1).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from natscene.scatter.bands import SKY_BANDS, SUN_BANDS, fit_ratios
+
+FINE_UP_TO_ORDER = 4
+
+
+@dataclass
+class AllOrdersSettings:
+    """Settings of the all-orders transport (config ``precompute.all_orders`` / ``shots.<name>.render``)."""
+
+    sun_collisions: int = 24_000_000
+    sky_collisions: int = 12_000_000
+    fine_voxels: int = 2
+    coarse_voxels: int = 4
+    guide_width: tuple = (0.5, 1.0)      # optical depth, fine and coarse cache
+    max_order: int = 4096
+    sun_bands: tuple = SUN_BANDS
+    sky_bands: tuple = SKY_BANDS
+    majorant_voxels: int = 4
+    step_voxels: float = 0.5
+    supersample: int = 4
+    p_ground: float = 0.25
+
+
+@dataclass
+class Lighting:
+    """What lights the cloud for one view: sun direction (toward the sun) and the sky dome (or None)."""
+
+    sun_dir: np.ndarray
+    dome: object = None
+
+
+@dataclass
+class ViewImages:
+    sun: np.ndarray                   # (B_sun, H, W)
+    sky: np.ndarray | None            # (4, B_sky, H, W) or None
+    sun_ratios: np.ndarray            # (B_sun,)
+    sky_ratios: np.ndarray | None     # (B_sky,)
+    sun_se: np.ndarray                # (B_sun, H, W) standard error of ``sun``
+    sky_se: np.ndarray | None
+    stats: dict = field(default_factory=dict)
+
+
+class Scene:
+    """The volume prepared once for a view: medium with the sun optical depth, majorant grid, emitters and
+    the cells' density integrals."""
+
+    def __init__(self, volume, lighting: Lighting, settings: AllOrdersSettings):
+        from natscene.scatter.inscatter import cell_density_integrals
+        from natscene.scatter.majorant import majorant_grid
+        from natscene.scatter.medium import make_medium
+        from natscene.scatter.photons import SkySource, SunBeam
+        self.settings = settings
+        self.volume = volume
+        self.med = make_medium(volume, lighting.sun_dir)
+        self.grid = majorant_grid(volume.density, volume.bbox_min, volume.bbox_max, settings.majorant_voxels)
+        self.bounds = self.grid.occupied_bounds()
+        self.sun = SunBeam(self.grid, volume.bbox_min, volume.bbox_max, self.med.sun_dir)
+        self.sky = (SkySource(lighting.dome, *self.bounds, p_ground=settings.p_ground)
+                    if lighting.dome is not None else None)
+        self.factors = (int(settings.fine_voxels), int(settings.coarse_voxels))
+        self.density_integrals = {f: cell_density_integrals(volume.density, f) for f in set(self.factors)}
+        self.voxel_volume = float(np.prod(volume.voxel_size))
+        self._depth = {}
+
+    def camera_depth(self, camera, factor: int) -> np.ndarray:
+        """∫rho from each cache cell to the camera (cached per camera position and cell size)."""
+        from natscene.scatter.inscatter import camera_depth
+        key = (tuple(float(x) for x in camera.position), factor)
+        if key not in self._depth:
+            self._depth[key] = camera_depth(self.med, camera.position, factor)
+        return self._depth[key]
+
+
+def _split(bands, up_to: int) -> tuple[list, list]:
+    """Indices of the bands that end at or below order ``up_to``, and of the others."""
+    fine = [i for i, (a, e) in enumerate(bands) if e is not None and e <= up_to]
+    coarse = [i for i in range(len(bands)) if i not in fine]
+    return fine, coarse
+
+
+def _caches(scene: Scene, bands) -> tuple:
+    """(factor, band indices) of the fine cache (orders <= 4) and the coarse cache (the rest)."""
+    fine, coarse = _split(bands, FINE_UP_TO_ORDER)
+    out = []
+    if fine:
+        out.append((scene.factors[0], fine))
+    if coarse:
+        out.append((scene.factors[1], coarse))
+    return tuple(out)
+
+
+def _images(scene: Scene, camera, sigma: float, halves, bands, channels: int) -> np.ndarray:
+    """(2 halves, channels, bands, H, W) images of the two halves' tallies."""
+    from natscene.scatter.inscatter import cache_radiance, gather
+    st = scene.settings
+    sig_k = sigma * scene.volume.extinction_scale
+    out = np.zeros((2, channels, len(bands), camera.height, camera.width), np.float32)
+    for ci, (f, sel) in enumerate(_caches(scene, bands)):
+        width = st.guide_width[0 if f == scene.factors[0] and ci == 0 else 1]
+        guide = scene.camera_depth(camera, f) * sig_k
+        caches = [cache_radiance(h.numerators[ci], scene.density_integrals[f], sig_k, scene.voxel_volume,
+                                 guide=guide, guide_width=width) for h in halves]
+        stack = np.concatenate([c.reshape(-1, *c.shape[2:]) for c in caches])   # (2 * ch * nsel, cz, cy, cx)
+        E = gather(scene.med, camera, sigma, stack, f, st.step_voxels, st.supersample, scene.bounds)
+        out[:, :, sel] = E.reshape(2, channels, len(sel), camera.height, camera.width)
+    return out
+
+
+def photons_for(scene: Scene, source, sigma: float, g: float, camera, collisions: int, k_min: int,
+                seed: int, pilot: int = 32768) -> int:
+    """Photons that make about ``collisions`` collisions at (sigma, g): a short pilot run measures the rate."""
+    from natscene.scatter.photons import trace
+    t = trace(scene.med, scene.grid, source, sigma, g, camera.position, pilot, ((1, None),),
+              caches=((scene.factors[1], None),), seed=seed + 104729, max_order=scene.settings.max_order,
+              k_min=10 ** 9)
+    per = max(t.collisions / pilot, 1e-3)
+    return int(min(max(collisions / per, 4 * pilot), 64 * collisions))
+
+
+def _trace_halves(scene: Scene, source, sigma: float, g: float, camera, n_photons: int, bands, k_min: int,
+                  seed: int):
+    """Two independent halves of the photons, each tallied into the fine and the coarse cache."""
+    from natscene.scatter.photons import trace
+    return [trace(scene.med, scene.grid, source, sigma, g, camera.position, max(1, n_photons // 2), bands,
+                  caches=_caches(scene, bands), seed=seed * 2 + h, max_order=scene.settings.max_order, k_min=k_min)
+            for h in range(2)]
+
+
+def standard_error(half_a: np.ndarray, half_b: np.ndarray) -> np.ndarray:
+    """Per-pixel standard error of the mean of two independent halves (..., H, W): the square root of
+    ((a - b) / 2)², an unbiased estimate of the variance, averaged over 3x3 pixels (the error varies
+    slowly across the image; one difference alone is a one-degree-of-freedom estimate)."""
+    from scipy.ndimage import uniform_filter
+    v = ((np.asarray(half_a, np.float64) - np.asarray(half_b, np.float64)) / 2) ** 2
+    size = [1] * (v.ndim - 2) + [3, 3]
+    return np.sqrt(uniform_filter(v, size=size, mode="nearest")).astype(np.float32)
+
+
+def view_images(scene: Scene, camera, sigma: float, g: float, seed: int = 0) -> ViewImages:
+    """Band images of the sun's and the sky's light at (sigma, g) for ``camera`` (see the module docstring)."""
+    st = scene.settings
+    H, W = camera.height, camera.width
+    nb_sun, nb_sky = len(st.sun_bands), len(st.sky_bands)
+    if sigma <= 0:
+        z = np.zeros((nb_sun, H, W), np.float32)
+        zs = np.zeros((4, nb_sky, H, W), np.float32) if scene.sky is not None else None
+        return ViewImages(z, zs, np.ones(nb_sun), np.ones(nb_sky) if zs is not None else None, z.copy(),
+                          None if zs is None else zs.copy(), {})
+    stats = {}
+    n_sun = photons_for(scene, scene.sun, sigma, g, camera, st.sun_collisions, 10 ** 9, seed)
+    sun_halves = _trace_halves(scene, scene.sun, sigma, g, camera, n_sun, st.sun_bands, 2, seed)
+    sun_img = _images(scene, camera, sigma, sun_halves, st.sun_bands, 1)[:, 0]
+    sun_hist = sum(h.histogram for h in sun_halves)
+    stats["sun_truncated"] = float(max(h.truncated for h in sun_halves))
+    stats["sun_collisions"] = int(sum(h.collisions for h in sun_halves))
+    stats["sun_photons"] = int(sum(h.photons for h in sun_halves))
+    sky = sky_se = sky_r = None
+    if scene.sky is not None:
+        n_sky = photons_for(scene, scene.sky, sigma, g, camera, st.sky_collisions, 10 ** 9, seed + 7919)
+        sky_halves = _trace_halves(scene, scene.sky, sigma, g, camera, n_sky, st.sky_bands, 1, seed + 7919)
+        sky_img = _images(scene, camera, sigma, sky_halves, st.sky_bands, 4)
+        sky = sky_img.mean(0)
+        sky_se = standard_error(sky_img[0], sky_img[1])
+        sky_r = fit_ratios(st.sky_bands, sum(h.histogram for h in sky_halves))
+        stats["sky_collisions"] = int(sum(h.collisions for h in sky_halves))
+        stats["sky_photons"] = int(sum(h.photons for h in sky_halves))
+    return ViewImages(sun_img.mean(0), sky, fit_ratios(st.sun_bands, sun_hist), sky_r,
+                      standard_error(sun_img[0], sun_img[1]), sky_se, stats)

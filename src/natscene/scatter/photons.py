@@ -1,0 +1,348 @@
+"""Photon tracing for the all-orders transport: every scattering order of the sun's and the sky's light.
+
+Photons enter the cloud as a parallel beam from the sun (:class:`SunBeam`) or from a direction of the sky
+dome (:class:`SkySource`), travel by delta tracking through mu_t = sigma_t k rho (:mod:`.majorant`) and
+scatter by Henyey–Greenstein(g) with albedo 1 (the albedo enters the composition as beta^k, :mod:`.bands`).
+At the k-th collision x_k (the photon arrives there after k - 1 scatterings) the photon's contribution to
+the light that scatters at x_k toward the camera is tallied in a voxel cache:
+
+    C_b(cell) += Φ p(ω_k · ω_cam(x_k), g)        for k in band b,
+
+Φ the photon's power, ω_k its direction, ω_cam(x) the unit vector from x toward the camera. The collision
+density of an analog walk is sigma_t(x) L(x, ω), so C_b(cell) estimates ∫_cell sigma_t(x) S_b(x) dV, S_b the
+in-scattered radiance toward the camera of the orders of band b (:mod:`.inscatter` divides by ∫ sigma_t).
+This is a collision estimator of the radiance field (Spanier & Gelbard 1969; the volume photon map of
+Jensen & Christensen 1998 without its density kernel), shared by every pixel that looks at the cell.
+
+The sun's first collision (order 1) is not tallied: single scattering is ray-marched exactly (Eq. 5).
+The sky's photons are tallied from order 1. A histogram of the tallied light per exact order (whole cloud)
+gives each band's order distribution (:func:`natscene.scatter.bands.fit_ratios`).
+
+Walks run wavefront-style (one Dr.Jit kernel per bounce, dead photons compacted away) while many photons
+are alive, then the long tail of survivors finishes in one symbolic loop.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+import natscene.variant  # noqa: F401
+import drjit as dr
+import mitsuba as mi
+
+from natscene.scatter.bands import band_table
+from natscene.scatter.majorant import MajorantGrid, free_flight
+from natscene.scatter.phase import hg_dr, hg_sample_cos_dr
+
+
+def _vec(x) -> "mi.ScalarVector3f":
+    return mi.ScalarVector3f(*[float(e) for e in x])
+
+
+def _frame(s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    a = np.cross(s, [0.0, 1.0, 0.0] if abs(s[1]) < 0.9 else [1.0, 0.0, 0.0])
+    a /= np.linalg.norm(a)
+    return a, np.cross(s, a)
+
+
+class SunBeam:
+    """Parallel sunlight of unit irradiance: photons start on a plane perpendicular to the sun, uniformly
+    over the texels whose rays can meet density (majorant > 0, dilated), so almost every photon enters the
+    cloud; each carries the same power (lit area / n)."""
+
+    channels = 1
+
+    def __init__(self, grid: MajorantGrid, bbox_min, bbox_max, sun_dir, texels: int = 128, dilate: int = 2):
+        from scipy.ndimage import binary_dilation
+        s = np.asarray(sun_dir, np.float64)
+        s = s / np.linalg.norm(s)
+        a, b = _frame(s)
+        lo, hi = np.asarray(bbox_min, np.float64), np.asarray(bbox_max, np.float64)
+        c = (lo + hi) / 2
+        corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])]) - c
+        ua, ub = corners @ a, corners @ b
+        R = float(np.linalg.norm(hi - lo))
+        ta, tb = (ua.max() - ua.min()) / texels, (ub.max() - ub.min()) / texels
+        ia, ib = np.meshgrid(np.arange(texels) + 0.5, np.arange(texels) + 0.5, indexing="ij")
+        pa, pb = ua.min() + ia * ta, ub.min() + ib * tb
+        cx, cy, cz = grid.shape
+        ts = np.arange(0.0, 2 * R, 0.5 * float(np.min(grid.cell)))
+        lit = np.zeros((texels, texels), bool)
+        for t in np.array_split(ts, max(1, len(ts) // 16)):
+            pts = c + a * pa[..., None, None] + b * pb[..., None, None] + s * (R - t[None, None, :, None])
+            q = np.floor((pts - grid.origin) / grid.cell).astype(np.int64)
+            ok = ((q >= 0) & (q < np.array([cx, cy, cz]))).all(-1)
+            q = np.where(ok[..., None], q, 0)
+            lit |= (ok & (grid.values[q[..., 2], q[..., 1], q[..., 0]] > 0)).any(-1)
+        lit = binary_dilation(lit, iterations=dilate)
+        self.idx = np.flatnonzero(lit.ravel()).astype(np.uint32)
+        self.texels = texels
+        self.area = float(self.idx.size * ta * tb)
+        self._frame = (a, b, s, c, R, float(ua.min()), float(ub.min()), float(ta), float(tb))
+        self._idx_dr = mi.UInt32(self.idx) if self.idx.size else None
+
+    def sample(self, n: int, rng):
+        """(origins, directions, [power]) of ``n`` photons."""
+        a, b, s, c, R, ua0, ub0, ta, tb = self._frame
+        j = mi.UInt32(dr.minimum(rng.next_float32() * self.idx.size, self.idx.size - 1))
+        tex = dr.gather(mi.UInt32, self._idx_dr, j)
+        ia = tex // self.texels
+        ib = tex - ia * self.texels
+        pa = ua0 + (mi.Float(ia) + rng.next_float32()) * ta
+        pb = ub0 + (mi.Float(ib) + rng.next_float32()) * tb
+        o = mi.Point3f(_vec(c) + _vec(a) * pa + _vec(b) * pb + _vec(s) * R)
+        d = mi.Vector3f(dr.zeros(mi.Vector3f, n) + _vec(-s))
+        return o, d, [dr.full(mi.Float, self.area / n, n)]
+
+
+class SkySource:
+    """Light from a :class:`natscene.scatter.skylight.Dome` in four channels: the dome's R, G, B and a
+    unit-radiance lower hemisphere (the ground). A direction ω (toward the source) is drawn from the dome's
+    luminance table (probability 1 - ``p_ground``) or uniformly below the horizon; the photon starts on a
+    face of ``box`` that faces ω, with probability ∝ the face's projected area, and carries
+    L_c(ω) A_proj(ω) / (pdf(ω) n) in channel c."""
+
+    channels = 4
+
+    def __init__(self, dome, box_min, box_max, p_ground: float = 0.25):
+        from natscene.scatter.skylight import cell_directions
+        self.dome = dome
+        rgb = np.asarray(dome.rgb, np.float64)
+        self.n_theta, self.n_phi = rgb.shape[:2]
+        lum = rgb @ np.array([0.2126, 0.7152, 0.0722])
+        lum = np.maximum(lum, 0.0).ravel()
+        has_sky = lum.sum() > 0
+        self.p_ground = float(p_ground) if has_sky else 1.0
+        p_cell = lum / lum.sum() if has_sky else np.full(lum.size, 1.0 / lum.size)
+        self.cdf = np.cumsum(p_cell)
+        self.cdf[-1] = 1.0
+        self.p_cell = p_cell
+        self.lo = np.asarray(box_min, np.float64)
+        self.hi = np.asarray(box_max, np.float64)
+        self._dirs = cell_directions(self.n_theta, self.n_phi)
+        self._rgb_dr = [mi.Float(rgb[..., c].ravel()) for c in range(3)]
+        self._pcell_dr = mi.Float(p_cell)
+        self._cdf_dr = mi.Float(self.cdf)
+
+    def sample(self, n: int, rng):
+        omega_cell = 2.0 * math.pi / (self.n_theta * self.n_phi)
+        u_sel = rng.next_float32()
+        ground = u_sel < self.p_ground
+        # upper hemisphere: a cell from the luminance CDF, uniform inside it
+        u_cell = rng.next_float32()
+        cell = mi.UInt32(dr.binary_search(0, self.cdf.size - 1,
+                                          lambda i: dr.gather(mi.Float, self._cdf_dr, i) < u_cell))
+        it = cell // self.n_phi
+        ip = cell - it * self.n_phi
+        mu_up = 1.0 - (mi.Float(it) + rng.next_float32()) / self.n_theta
+        phi_up = 2.0 * math.pi * (mi.Float(ip) + rng.next_float32()) / self.n_phi
+        # lower hemisphere: uniform
+        mu_dn = -rng.next_float32()
+        phi_dn = 2.0 * math.pi * rng.next_float32()
+        mu = dr.select(ground, mu_dn, mu_up)
+        phi = dr.select(ground, phi_dn, phi_up)
+        sn = dr.safe_sqrt(1.0 - mu * mu)
+        om = mi.Vector3f(sn * dr.sin(phi), mu, sn * dr.cos(phi))     # toward the source
+        pdf_up = (1.0 - self.p_ground) * dr.gather(mi.Float, self._pcell_dr, cell) / omega_cell
+        pdf_dn = mi.Float(self.p_ground / (2.0 * math.pi))
+        pdf = dr.select(ground, pdf_dn, pdf_up)
+        # a face of the box facing om, chosen by projected area, and a uniform point on it
+        ext = [float(e) for e in self.hi - self.lo]
+        areas = (ext[1] * ext[2], ext[0] * ext[2], ext[0] * ext[1])
+        ax = [dr.abs(om.x) * areas[0], dr.abs(om.y) * areas[1], dr.abs(om.z) * areas[2]]
+        a_proj = ax[0] + ax[1] + ax[2]
+        u = rng.next_float32() * a_proj
+        pick_x = u < ax[0]
+        pick_y = ~pick_x & (u < ax[0] + ax[1])
+        pick_z = ~pick_x & ~pick_y
+        u1, u2 = rng.next_float32(), rng.next_float32()
+        lo = _vec(self.lo)
+        x = dr.select(pick_x, dr.select(om.x > 0, float(self.hi[0]), float(self.lo[0])), lo.x + u1 * ext[0])
+        y = dr.select(pick_x, lo.y + u1 * ext[1], dr.select(pick_y, dr.select(om.y > 0, float(self.hi[1]), float(self.lo[1])),
+                                                             lo.y + u2 * ext[1]))
+        z = dr.select(pick_z, dr.select(om.z > 0, float(self.hi[2]), float(self.lo[2])), lo.z + u2 * ext[2])
+        eps = 1e-4 * float(np.linalg.norm(ext))
+        o = mi.Point3f(x, y, z) + om * eps
+        d = -om
+        base = a_proj / (pdf * n)
+        w = [dr.select(ground, 0.0, dr.gather(mi.Float, self._rgb_dr[c], cell) * base) for c in range(3)]
+        w.append(dr.select(ground, base, 0.0))
+        return mi.Point3f(o), mi.Vector3f(d), w
+
+
+@dataclass
+class InscatterTally:
+    """Cache numerators per cache: ``numerators[i]`` (channels, len(band_sets[i]), cz, cy, cx) in cells of
+    ``factors[i]`` voxels for the bands ``band_sets[i]``; the tallied light per exact order (index = order,
+    all channels and cells)."""
+
+    numerators: list
+    factors: tuple
+    band_sets: tuple
+    histogram: np.ndarray
+    photons: int
+    collisions: int
+    truncated: float          # power of the photons still alive at max_order, relative to all tallied light
+
+
+def _cache_index(p, lo, ext, res, factor: int, dims):
+    nx, ny, nz = res
+    cx, cy, cz = dims
+    q = (p - lo) / ext
+    ix = mi.UInt32(dr.clip(q.x * (nx / factor), 0, cx - 1))
+    iy = mi.UInt32(dr.clip(q.y * (ny / factor), 0, cy - 1))
+    iz = mi.UInt32(dr.clip(q.z * (nz / factor), 0, cz - 1))
+    return (iz * cy + iy) * cx + ix
+
+
+def _scatter_dir(w, g: float, rng):
+    cos_t = hg_sample_cos_dr(rng.next_float32(), g)
+    phi = 2.0 * math.pi * rng.next_float32()
+    sin_t = dr.safe_sqrt(1.0 - cos_t * cos_t)
+    return dr.normalize(mi.Frame3f(w).to_world(mi.Vector3f(sin_t * dr.cos(phi), sin_t * dr.sin(phi), cos_t)))
+
+
+def _tally_lanes(p, w, k, g, wts, accs, hist, slot_tabs, cam, lo, ext, res, caches, max_order):
+    """Per-lane tally (orders differ between lanes): each cache takes the lanes whose band it holds."""
+    val = hg_dr(dr.dot(w, dr.normalize(cam - p)), g)
+    kk = dr.minimum(k, max_order)
+    tot = mi.Float(0.0)
+    for c in range(len(wts)):
+        tot += val * wts[c]
+    for ci, (factor, dims, ncell) in enumerate(caches):
+        slot = dr.gather(mi.Int32, slot_tabs[ci], kk)
+        idx = mi.UInt32(dr.maximum(slot, 0)) * ncell + _cache_index(p, lo, ext, res, factor, dims)
+        for c in range(len(wts)):
+            dr.scatter_reduce(dr.ReduceOp.Add, accs[ci][c], val * wts[c], idx, slot >= 0)
+    dr.scatter_reduce(dr.ReduceOp.Add, hist, tot, kk)
+
+
+@dr.syntax
+def _walk_tail(med, grid, p, w, wts, k0: int, sig_k: float, g: float, rng, accs, hist, slot_tabs, cam, lo, ext,
+               res, caches, max_order: int, k_min: int):
+    """Finish the walks of the surviving photons (after their k0-th collision) in one symbolic loop."""
+    k = dr.full(mi.UInt32, k0, dr.width(p))
+    alive = dr.full(mi.Bool, True, dr.width(p))
+    count = mi.UInt32(0)
+    while dr.hint(alive, include=[rng]):
+        w = _scatter_dir(w, g, rng)
+        t, hit = free_flight(med, grid, p, w, sig_k, rng, alive)
+        alive &= hit
+        p = dr.select(alive, mi.Point3f(p + w * t), p)
+        k += 1
+        count += dr.select(alive, 1, 0)
+        if alive & (k >= k_min):
+            _tally_lanes(p, w, k, g, wts, accs, hist, slot_tabs, cam, lo, ext, res, caches, max_order)
+        alive &= k < max_order
+    return alive, count
+
+
+def trace(med, grid: MajorantGrid, source, sigma: float, g: float, camera_position, n_photons: int, bands,
+          caches=((2, None),), seed: int = 0, max_order: int = 4096, k_min: int = 2, batch: int = 2 ** 20,
+          progress=None) -> InscatterTally:
+    """Trace ``n_photons`` from ``source`` through the medium at (sigma, g) and tally the in-scatter caches.
+
+    ``caches``: (factor, band indices or None = all bands) per cache; every band goes to exactly one cache.
+    """
+    density = med.volume.density
+    nz, ny, nx = density.shape
+    res = (nx, ny, nz)
+    nb = len(bands)
+    band_sets, geo, slot_np = [], [], []
+    owner = -np.ones(nb, np.int64)
+    for ci, (factor, sel) in enumerate(caches):
+        sel = list(range(nb)) if sel is None else [int(i) for i in sel]
+        if np.any(owner[sel] >= 0):
+            raise ValueError(f"a band is assigned to two caches: {caches}")
+        owner[sel] = ci
+        dims = (-(-nx // factor), -(-ny // factor), -(-nz // factor))
+        geo.append((int(factor), dims, dims[0] * dims[1] * dims[2]))
+        band_sets.append(tuple(sel))
+    if np.any(owner < 0):
+        raise ValueError(f"bands {np.flatnonzero(owner < 0).tolist()} belong to no cache")
+    tab = band_table(bands, max_order)
+    for ci, sel in enumerate(band_sets):
+        local = -np.ones(nb, np.int64)
+        local[list(sel)] = np.arange(len(sel))
+        slot = local[tab].astype(np.int32)
+        slot[:k_min] = -1
+        slot_np.append(slot)
+    slot_tabs = [mi.Int32(x) for x in slot_np]
+    nch = source.channels
+    accs = [[dr.zeros(mi.Float, max(1, geo[ci][2] * len(band_sets[ci]))) for _ in range(nch)]
+            for ci in range(len(caches))]
+    hist = dr.zeros(mi.Float, max_order + 1)
+    sig_k = float(sigma) * med.scale
+    g = float(g)
+    cam = mi.ScalarPoint3f(*[float(e) for e in camera_position])
+    lo = _vec(med.bbox_min)
+    ext = _vec(med.bbox_max - med.bbox_min)
+    collisions = 0
+    truncated = mi.Float(0.0)
+    done = 0
+    while done < n_photons:
+        n = min(batch, n_photons - done)
+        rng = mi.PCG32(size=n, initstate=dr.arange(mi.UInt64, n) + mi.UInt64(done),
+                       initseq=mi.UInt64(int(seed) * 7919 + 1))
+        p, w, wts = source.sample(n, rng)
+        wts = [x * (n / n_photons) for x in wts]     # powers of this batch as a share of the whole run
+        alive = dr.full(mi.Bool, True, n)
+        k = 0
+        width = n
+        while True:
+            if k > 0:
+                w = _scatter_dir(w, g, rng)
+            t, hit = free_flight(med, grid, p, w, sig_k, rng, alive)
+            alive &= hit
+            p = dr.select(alive, mi.Point3f(p + w * t), p)
+            k += 1
+            kk = min(k, max_order)
+            if k >= k_min:
+                val = dr.select(alive, hg_dr(dr.dot(w, dr.normalize(cam - p)), g), 0.0)
+                ci = int(owner[tab[kk]])
+                factor, dims, ncell = geo[ci]
+                idx = int(slot_np[ci][kk]) * ncell + _cache_index(p, lo, ext, res, factor, dims)
+                tot = mi.Float(0.0)
+                for c in range(nch):
+                    dr.scatter_reduce(dr.ReduceOp.Add, accs[ci][c], val * wts[c], idx, alive)
+                    tot += val * wts[c]
+                dr.scatter_reduce(dr.ReduceOp.Add, hist, dr.sum(tot), kk)
+            dr.eval(p, w, alive, rng, *wts, *[a for acc in accs for a in acc], hist)
+            n_alive = int(dr.count(alive)[0])
+            collisions += n_alive
+            if n_alive == 0:
+                break
+            if k >= max_order:
+                truncated += dr.sum(dr.select(alive, sum(wts), 0.0))
+                break
+            if n_alive < width // 2:
+                sel = dr.compress(alive)
+                p = dr.gather(mi.Point3f, p, sel)
+                w = dr.gather(mi.Vector3f, w, sel)
+                wts = [dr.gather(mi.Float, x, sel) for x in wts]
+                st, inc = dr.gather(mi.UInt64, rng.state, sel), dr.gather(mi.UInt64, rng.inc, sel)
+                rng = mi.PCG32()
+                rng.state, rng.inc = st, inc
+                alive = dr.full(mi.Bool, True, n_alive)
+                width = n_alive
+                dr.eval(p, w, rng, *wts)
+            if width <= max(2048, n // 64):
+                alive, count = _walk_tail(med, grid, p, w, wts, k, sig_k, g, rng, accs, hist, slot_tabs, cam, lo,
+                                          ext, res, geo, max_order, k_min)
+                dr.eval(*[a for acc in accs for a in acc], hist, alive, count)
+                truncated += dr.sum(dr.select(alive, sum(wts), 0.0))
+                collisions += int(dr.sum(count)[0])
+                break
+        done += n
+        if progress:
+            progress(done, n_photons)
+    nums = [np.stack([np.asarray(a, np.float64)[:geo[ci][2] * len(band_sets[ci])]
+                      .reshape(len(band_sets[ci]), geo[ci][1][2], geo[ci][1][1], geo[ci][1][0]) for a in accs[ci]])
+            for ci in range(len(caches))]
+    h = np.asarray(hist, np.float64)
+    tot_light = h.sum()
+    trunc = float(np.asarray(truncated)[0]) if dr.width(truncated) else 0.0
+    return InscatterTally(nums, tuple(x[0] for x in geo), tuple(band_sets), h, int(done), int(collisions),
+                          trunc / tot_light if tot_light > 0 else 0.0)

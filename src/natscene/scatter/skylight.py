@@ -1,0 +1,82 @@
+"""The sky dome that lights the cloud (the skylight Dobashi 2012 §3 leaves out and §7 names as a limit).
+
+The dome is a table of radiance over the upper hemisphere (cells uniform in cos(zenith) and azimuth, so all
+cells have the same solid angle 2π / (n_theta n_phi)) in linear RGB, plus a uniform lower hemisphere
+standing for the ground. The precompute lights the cloud with four separate "channels" so that the fit
+can scale them afterwards: the dome's R, G and B radiance distributions and a unit-radiance ground
+(§7: "estimate the intensity distribution of the sky from a photograph before using GAs").
+
+Model: the Preetham et al. (1999) daylight sky of the view's sun (:mod:`natscene.sky.daylight`). It is
+chosen over extrapolating the photo's L_sky to a hemisphere because a photo shows a few tens of degrees
+of sky around the clouds while the cloud is lit by the whole dome, most of it (the zenith, the sun's
+aureole, the horizon) outside the frame; the analytic dome follows the sun and its turbidity. The photo
+fixes its level and colour: each channel is scaled so that the dome, seen through the view's camera, has
+the photo's mean L_sky (:func:`calibration`). The ground radiance is albedo / π times the horizontal
+irradiance of the sun and the sky (a Lambertian ground in the open).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass
+class Dome:
+    """Radiance of the sky dome: ``rgb`` (n_theta, n_phi, 3) over the upper hemisphere (row 0 at the zenith,
+    cells uniform in cos(zenith) and azimuth from +z toward +x), ``ground`` (3,) for the lower hemisphere."""
+
+    rgb: np.ndarray
+    ground: np.ndarray
+
+    @property
+    def cell_solid_angle(self) -> float:
+        n_t, n_p = self.rgb.shape[:2]
+        return 2.0 * np.pi / (n_t * n_p)
+
+
+def cell_directions(n_theta: int, n_phi: int) -> np.ndarray:
+    """Unit directions (n_theta, n_phi, 3) of the dome's cell centres (y up)."""
+    mu = 1.0 - (np.arange(n_theta) + 0.5) / n_theta          # cos(zenith), 1 at the zenith
+    phi = 2.0 * np.pi * (np.arange(n_phi) + 0.5) / n_phi
+    s = np.sqrt(1.0 - mu ** 2)
+    return np.stack([s[:, None] * np.sin(phi)[None], np.broadcast_to(mu[:, None], (n_theta, n_phi)),
+                     s[:, None] * np.cos(phi)[None]], axis=-1)
+
+
+def daylight_dome(sun_dir, turbidity: float = 3.0, zenith_luminance: float = 0.3,
+                  reference_elevation: float = 35.0, ground=(0.0, 0.0, 0.0), n_theta: int = 32,
+                  n_phi: int = 64) -> Dome:
+    """The Preetham sky of ``sun_dir`` (scaled as the shots' sky) on a dome table."""
+    from natscene.sky.daylight import preetham_rgb
+    d = cell_directions(n_theta, n_phi)
+    rgb = preetham_rgb(d.reshape(-1, 3), sun_dir, turbidity, zenith_luminance, reference_elevation,
+                       min_view_elevation=0.5).reshape(n_theta, n_phi, 3)
+    return Dome(rgb.astype(np.float64), np.asarray(ground, np.float64).reshape(3))
+
+
+def uniform_dome(radiance: float = 1.0, n_theta: int = 8, n_phi: int = 16) -> Dome:
+    """Radiance ``radiance`` from every direction (the white furnace)."""
+    return Dome(np.full((n_theta, n_phi, 3), float(radiance)), np.full(3, float(radiance)))
+
+
+def irradiance(dome: Dome) -> np.ndarray:
+    """Horizontal irradiance (3,) of the upper hemisphere, ∫ L cos(zenith) dω."""
+    mu = cell_directions(*dome.rgb.shape[:2])[..., 1]
+    return (dome.rgb * mu[..., None]).sum((0, 1)) * dome.cell_solid_angle
+
+
+def ground_radiance(albedo, sun_irradiance, sky_irradiance) -> np.ndarray:
+    """Radiance (3,) of a Lambertian ground of ``albedo`` under the sun's and the sky's horizontal irradiance."""
+    return np.asarray(albedo, np.float64) / np.pi * (np.asarray(sun_irradiance, np.float64)
+                                                    + np.asarray(sky_irradiance, np.float64))
+
+
+def calibration(photo_sky_mean, dome_view_mean) -> np.ndarray:
+    """Per-channel factors (3,) that give the dome the photo's mean sky radiance in the view.
+
+    ``photo_sky_mean``: mean linear RGB of the photo's L_sky; ``dome_view_mean``: mean of the dome's radiance
+    over the same view's pixel directions (recorded by the precompute)."""
+    p = np.asarray(photo_sky_mean, np.float64).reshape(3)
+    d = np.asarray(dome_view_mean, np.float64).reshape(3)
+    return np.where(d > 0, p / np.maximum(d, 1e-30), 0.0)
