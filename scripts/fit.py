@@ -4,7 +4,6 @@ from pathlib import Path
 import numpy as np
 
 from natscene import io
-from natscene.fit.genetic import PARAMS
 from natscene.fit.keyframe import fit_keyframe
 from natscene.fit.report import contact_sheet, convergence_csv, convergence_plot
 from natscene.runner import run
@@ -24,6 +23,7 @@ def main(snakemake, log):
     fit = fit_keyframe(tables, photo, np.rint(label) == 1, sky, sun["c_in"], settings, seed=kf.get("seed", 0),
                        rank=kf.get("rank", 1), method=kf.get("method"), log=log.info)
     res, params, images = fit["result"], fit["params"], fit["images"]
+    names = fit["problem"].names
     params = {"keyframe": par.name, "photo": kf["photo"], "volume": kf["volume"], "view": kf["view"], **params,
               "warnings": [f"sky ({inp.sun}): {w}" for w in sun.get("warnings") or []]}
     for w in params["warnings"]:
@@ -33,14 +33,15 @@ def main(snakemake, log):
     h, w = images.shape[1:3]
     io.write_exr(out.ranked, np.moveaxis(images, 0, 2).reshape(h, w, -1), chans,
                  attrs={"keyframe": par.name, "objective": [c.objective for c in res.ranked],
-                        "params": [[c.values[p] for p in PARAMS] for c in res.ranked]}, stage="fit")
+                        "params": [[c.values[p] for p in names] for c in res.ranked],
+                        "param_names": list(names)}, stage="fit")
     labels = [f"#{i + 1} O={c.objective:.3f}" for i, c in enumerate(res.ranked)]
     io.write_png(out.sheet, contact_sheet(photo, list(images), labels, columns=settings.get("contact_columns", 4)),
                  encoded=True)
     io.write_text(out.csv, convergence_csv(res.best_history, res.mean_history))
     convergence_plot(out.plot, res.best_history, res.mean_history,
                      title=f"{par.name}: {params['method']} ({res.reason})", epsilon_o=settings.get("epsilon_O"))
-    log.info(f"chosen rank {kf.get('rank', 1)}: " + ", ".join(f"{p}={params['chosen'][p]:.4g}" for p in PARAMS)
+    log.info(f"chosen rank {kf.get('rank', 1)}: " + ", ".join(f"{p}={params['chosen'][p]:.4g}" for p in names)
              + f", kappa_a={params['chosen']['kappa_a']}")
 
 

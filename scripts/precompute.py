@@ -1,4 +1,4 @@
-"""Rule `precompute`: Dobashi 2012 §4.3 tables for one (volume, view)."""
+"""Rule `precompute`: Dobashi 2012 §4.3 tables for one (volume, view), for the configured transport."""
 from pathlib import Path
 
 from natscene.geometry import Camera, sun_direction
@@ -7,6 +7,7 @@ from natscene.runner import run
 
 
 def main(snakemake, log):
+    from natscene.scatter.allorders import AllOrdersSettings
     from natscene.scatter.contact import contact_sheet
     from natscene.scatter.tables import precompute, save_tables
     from natscene.variant import select_variant
@@ -18,18 +19,24 @@ def main(snakemake, log):
     volume = load_volume(Path(snakemake.input.density).parent)
     camera = Camera.from_view(view)
     sun = sun_direction(view["sun"]["azimuth"], view["sun"]["elevation"])
+    transport = cfg["transport"]
+    ao = cfg.get("all_orders") or {}
+    settings = AllOrdersSettings(**{k: (tuple(v) if isinstance(v, list) else v) for k, v in ao.items()},
+                                 step_voxels=cfg["step_voxels"], supersample=cfg["supersample"])
+    detail = (f"n_m={cfg['n_m']}, {cfg['spp']} spp" if transport == "dobashi" else
+              f"{settings.sun_collisions:.3g} + {settings.sky_collisions:.3g} photon collisions per node")
     log.info(f"precompute {snakemake.wildcards.volume} x {snakemake.wildcards.view}: {camera.width}x{camera.height}, "
-             f"{len(cfg['sigma_t'])} sigma_t x {len(cfg['g'])} g, n_m={cfg['n_m']}, {cfg['spp']} spp ({variant})")
+             f"{len(cfg['sigma_t'])} sigma_t x {len(cfg['g'])} g, transport {transport}, {detail} ({variant})")
     tables = precompute(volume, camera, sun, sigmas=cfg["sigma_t"], gs=cfg["g"], n_m=cfg["n_m"], spp=cfg["spp"],
                         seed=cfg["seed"], step_voxels=cfg["step_voxels"], supersample=cfg["supersample"],
-                        rho_threshold=cfg["rho_threshold"], batch_spp=cfg["batch_spp"], log=log.info)
+                        rho_threshold=cfg["rho_threshold"], batch_spp=cfg["batch_spp"], log=log.info,
+                        transport=transport, all_orders=settings, skylight=cfg.get("skylight"))
     out = Path(snakemake.output[0]).parent   # multiext outputs (cacheable rule): all in one folder
     meta = save_tables(out, tables, {"volume": snakemake.wildcards.volume, "view_name": snakemake.wildcards.view,
                                      "view": view, "variant": variant})
     write_png(out / "contact_sheet.png", contact_sheet(tables), encoded=True)
-    log.info(f"done in {meta['timings']['total_s']:.1f} s; tables {meta['memory_bytes'] / 1e6:.1f} MB in memory, "
-             f"{sum(meta['files_bytes'].values()) / 1e6:.1f} MB on disk; relative standard error "
-             f"{meta.get('relative_standard_error')}")
+    log.info(f"tables {meta['memory_bytes'] / 1e6:.1f} MB in memory, {sum(meta['files_bytes'].values()) / 1e6:.1f} MB "
+             f"on disk; pixel relative standard error {meta.get('pixel_relative_standard_error')}")
 
 
 run(snakemake, main)  # noqa: F821

@@ -39,7 +39,7 @@ rule fit:
         sky=lambda wc: _fit_sky(wc, "sky"),
         sun=lambda wc: f"{RESULTS}/sky/{_keyframe(wc)['photo']}/sun.yaml",
         single=lambda wc: _pre(wc, "single.exr"),
-        multiple=lambda wc: _pre(wc, "multiple.exr"),
+        multiple=lambda wc: _pre(wc, _precompute_files()[2]),   # allorders.exr or multiple.exr (transport)
         transmittance=lambda wc: _pre(wc, "transmittance.exr"),
         geometry=lambda wc: _pre(wc, "geometry.exr"),
         meta=lambda wc: _pre(wc, "meta.yaml"),

@@ -4,13 +4,17 @@ def _precompute_settings():
     return {k: v for k, v in config["precompute"].items() if k != "pairs"}
 
 
+def _precompute_files():
+    from natscene.scatter.tables import table_files
+    return table_files(config["precompute"]["transport"])
+
+
 # Between-workflow cache (DESIGN §4): `snakemake --cache precompute` with $SNAKEMAKE_OUTPUT_CACHE set reuses
 # the tables of another project with the same volume, view, settings and code; "omit-software" because the
 # code is already part of the hash through params.code. Snakemake's cache needs the outputs as one multiext.
 rule precompute:
     output:
-        multiext(f"{RESULTS}/precompute/{{volume}}/{{view}}/", "single.exr", "transmittance.exr", "multiple.exr",
-                 "geometry.exr", "meta.yaml", "contact_sheet.png"),
+        multiext(f"{RESULTS}/precompute/{{volume}}/{{view}}/", *_precompute_files(), "contact_sheet.png"),
     input:
         density=f"{RESULTS}/volumes/{{volume}}/density.vol",
         volume_meta=f"{RESULTS}/volumes/{{volume}}/meta.yaml",

@@ -24,7 +24,13 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-PARAMS = ("L_in", "g", "sigma_t", "beta", "L_amb")
+PARAMS = ("L_in", "g", "sigma_t", "beta", "L_amb")       # transport: dobashi (the paper's five)
+PARAMS_ALL_ORDERS = ("L_in", "g", "sigma_t", "beta")     # transport: all_orders (the skylight replaces L_amb)
+
+
+def fit_params(transport: str) -> tuple:
+    """The GA's parameters for a transport model."""
+    return PARAMS_ALL_ORDERS if transport == "all_orders" else PARAMS
 DEFAULT_RANGES = {"L_in": (0.0, 10.0), "g": (0.0, 1.0), "sigma_t": (0.0, 1.0), "beta": (0.0, 1.0),
                   "L_amb": (0.0, 1.0)}
 
@@ -135,15 +141,15 @@ def run_ga(evaluate: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]],
            ranges: dict | None = None, population: int = 20, bits: int = 32, crossover_rate: float = 0.8,
            mutation_rate: float = 0.02, epsilon_o: float = 0.5, n_suc: int = 20, n_max: int = 100,
            top_k: int = 10, distinct_tol: float = 0.01, scaling: str = "linear", c_mult: float = 2.0,
-           seed: int = 0,
-           progress: Callable[[int, float, float], None] | None = None) -> FitResult:
-    """Minimise O with the GA. ``evaluate(values (P, 5)) -> (O (P,), kappa (P, 3))``; columns in PARAMS order.
+           seed: int = 0, progress: Callable[[int, float, float], None] | None = None,
+           names: tuple = PARAMS) -> FitResult:
+    """Minimise O with the GA. ``evaluate(values (P, n)) -> (O (P,), kappa (P, 3))``; columns in ``names`` order.
 
     ``n_max`` counts iterations after the initial population; ``epsilon_o <= 0`` or ``n_suc <= 0`` disable
     those criteria (e.g. to force n_max iterations as in §5.1).
     """
     ranges = {**DEFAULT_RANGES, **(ranges or {})}
-    codec = Codec([ranges[p] for p in PARAMS], bits)
+    codec = Codec([ranges[p] for p in names], bits)
     span = np.where(codec.hi > codec.lo, codec.hi - codec.lo, 1.0)
     if scaling not in ("linear", "none"):
         raise ValueError(f"scaling must be 'linear' or 'none', got {scaling!r}")
@@ -207,5 +213,5 @@ def run_ga(evaluate: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]],
     av, ao = np.concatenate(arch_v), np.concatenate(arch_o)
     ak, ait = np.concatenate(arch_k), np.concatenate(arch_it)
     idx = _distinct_top(av, ao, span, top_k, distinct_tol)
-    ranked = [Candidate(dict(zip(PARAMS, av[i].tolist())), float(ao[i]), ak[i], int(ait[i])) for i in idx]
+    ranked = [Candidate(dict(zip(names, av[i].tolist())), float(ao[i]), ak[i], int(ait[i])) for i in idx]
     return FitResult(ranked[0], ranked, np.array(best_hist), np.array(mean_hist), it, len(ao), reason, av, ao)

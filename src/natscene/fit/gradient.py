@@ -22,14 +22,15 @@ from natscene.fit.genetic import DEFAULT_RANGES, PARAMS, Candidate, FitResult
 def gradient_descent(evaluate: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]], ranges: dict | None = None,
                      h: float = 0.01, alpha0: float = 0.25, n_alpha: int = 10, max_iter: int = 100,
                      epsilon_o: float = 0.0, seed: int = 0, start: np.ndarray | None = None,
-                     progress: Callable[[int, float, float], None] | None = None) -> FitResult:
+                     progress: Callable[[int, float, float], None] | None = None,
+                     names: tuple = PARAMS) -> FitResult:
     """Minimise O from a random (or given, in parameter units) start; returns a FitResult like the GA's."""
     ranges = {**DEFAULT_RANGES, **(ranges or {})}
-    lo = np.array([ranges[p][0] for p in PARAMS], np.float64)
-    hi = np.array([ranges[p][1] for p in PARAMS], np.float64)
+    lo = np.array([ranges[p][0] for p in names], np.float64)
+    hi = np.array([ranges[p][1] for p in names], np.float64)
     span = np.where(hi > lo, hi - lo, 1.0)
     rng = np.random.default_rng(seed)
-    n = len(PARAMS)
+    n = len(names)
     u = rng.random(n) if start is None else np.clip((np.asarray(start, np.float64) - lo) / span, 0, 1)
 
     def ev(us: np.ndarray):
@@ -70,7 +71,7 @@ def gradient_descent(evaluate: Callable[[np.ndarray], tuple[np.ndarray, np.ndarr
         hist.append(cur_o)
         if progress:
             progress(it, cur_o, cur_o)
-    best = Candidate(dict(zip(PARAMS, (lo + u * span).tolist())), cur_o, cur_k, it)
+    best = Candidate(dict(zip(names, (lo + u * span).tolist())), cur_o, cur_k, it)
     h_arr = np.array(hist)
     return FitResult(best, [best], h_arr, h_arr.copy(), it, evals, reason,
                      (lo + u * span)[None], np.array([cur_o]))

@@ -10,7 +10,7 @@ import time
 
 import numpy as np
 
-from natscene.fit.genetic import DEFAULT_RANGES, PARAMS, run_ga
+from natscene.fit.genetic import DEFAULT_RANGES, fit_params, run_ga
 from natscene.fit.gradient import gradient_descent
 from natscene.fit.kappa import kappa_grid
 from natscene.fit.objective import Levels
@@ -20,7 +20,8 @@ from natscene.io import InputError
 
 def effective_ranges(settings: dict, tables, log=None) -> dict:
     """The configured ranges, with g and sigma_t clipped to the tables' grids (no data outside them)."""
-    ranges = {p: tuple(float(x) for x in settings.get("ranges", {}).get(p, DEFAULT_RANGES[p])) for p in PARAMS}
+    names = fit_params(getattr(tables, "transport", "dobashi"))
+    ranges = {p: tuple(float(x) for x in settings.get("ranges", {}).get(p, DEFAULT_RANGES[p])) for p in names}
     for p, (lo, hi) in ranges.items():
         if hi < lo:
             raise InputError(f"config key 'fit.ranges.{p}': max {hi} is below min {lo}")
@@ -47,10 +48,22 @@ def fit_keyframe(tables, photo, photo_cloud, sky, c_in, settings: dict, seed: in
     if kap.get("max", 1.0) < kap.get("min", 0.0):
         raise InputError("config key 'fit.kappa': max is below min")
     levels = Levels(settings.get("n_levels", 256), settings.get("encoding", "srgb"))
+    transport = getattr(tables, "transport", "dobashi")
+    fixed = {}
+    if transport == "all_orders":
+        from natscene.scatter.skylight import calibration
+        view_mean = tables.meta.get("skylight", {}).get("view_mean_rgb")
+        if view_mean is None:
+            raise InputError("the precompute's meta.yaml has no skylight.view_mean_rgb; rerun the precompute rule")
+        fixed = {"sky_scale": calibration(np.asarray(sky, np.float64).reshape(-1, 3).mean(0), view_mean),
+                 "ground_albedo": np.broadcast_to(np.asarray(settings.get("ground_albedo", 0.2), np.float64), (3,))}
+        log(f"all-orders transport: the sky dome calibrated to the photo's L_sky by "
+            f"{np.round(fixed['sky_scale'], 4).tolist()}, ground albedo {fixed['ground_albedo'].tolist()}")
     problem = FitProblem(tables, sky, photo, photo_cloud, c_in, levels=levels,
                          metric=settings.get("metric", "difference"),
                          kappas=kappa_grid(kap.get("min", 0.0), kap.get("max", 1.0), kap.get("step", 0.1)),
-                         compose_cloud=compose_cloud, apply_atmosphere=apply_atmosphere)
+                         compose_cloud=compose_cloud, apply_atmosphere=apply_atmosphere, fixed=fixed)
+    names = problem.names
     ranges = effective_ranges(settings, tables, log)
     log(f"{problem.n_pixels} synthetic cloud pixels, {int(np.asarray(photo_cloud).sum())} photo cloud pixels, "
         f"method {method}")
@@ -67,12 +80,13 @@ def fit_keyframe(tables, photo, photo_cloud, sky, c_in, settings: dict, seed: in
                         scaling=settings.get("scaling", "linear"), epsilon_o=settings.get("epsilon_O", 0.5),
                         n_suc=settings.get("n_suc", 20), n_max=settings.get("n_max", 100),
                         top_k=settings.get("top_k", 10), distinct_tol=settings.get("distinct_tol", 0.01),
-                        seed=seed, progress=progress)
+                        seed=seed, progress=progress, names=names)
     elif method == "gradient":
         gs = settings.get("gradient", {})
         result = gradient_descent(problem, ranges, h=gs.get("h", 0.01), alpha0=gs.get("alpha0", 0.25),
                                   n_alpha=gs.get("n_alpha", 10), max_iter=gs.get("max_iter", 100),
-                                  epsilon_o=settings.get("epsilon_O", 0.5), seed=seed, progress=progress)
+                                  epsilon_o=settings.get("epsilon_O", 0.5), seed=seed, progress=progress,
+                                  names=names)
     else:
         raise InputError(f"config key 'fit.method': unknown method {method!r} (ga or gradient)")
     seconds = time.perf_counter() - t0
@@ -82,22 +96,24 @@ def fit_keyframe(tables, photo, photo_cloud, sky, c_in, settings: dict, seed: in
     if rank > len(ranked):
         raise InputError(f"keyframe rank {rank} but only {len(ranked)} distinct parameter sets were ranked; "
                          f"choose a rank <= {len(ranked)} or raise fit.top_k")
-    vals = np.array([[c.values[p] for p in PARAMS] for c in ranked])
+    vals = np.array([[c.values[p] for p in names] for c in ranked])
     kappas = np.array([c.kappa for c in ranked])
     images = problem.render(vals, kappas)
 
     def entry(i, c):
-        return {"rank": i + 1, "O": float(c.objective), **{p: float(c.values[p]) for p in PARAMS},
+        # L_amb is a parameter of the Dobashi transport only; 0 keeps the keyframe contract for all_orders
+        return {"rank": i + 1, "O": float(c.objective), "L_amb": 0.0, **{p: float(c.values[p]) for p in names},
                 "kappa_a": [round(float(k), 6) for k in c.kappa], "iteration": int(c.iteration)}
 
     chosen = entry(rank - 1, ranked[rank - 1])
+    extra = {k: np.asarray(v, np.float64).round(6).tolist() for k, v in fixed.items()}
+    log(f"{1000 * seconds / max(result.iterations + 1, 1):.1f} ms per iteration")
     params = {
-        "chosen": {**chosen, "c_in": [float(x) for x in np.asarray(c_in).reshape(3)]},
+        "chosen": {**chosen, "c_in": [float(x) for x in np.asarray(c_in).reshape(3)], **extra},
         "ranked": [entry(i, c) for i, c in enumerate(ranked)],
-        "method": method, "seed": int(seed), "chosen_rank": int(rank),
+        "transport": transport, "method": method, "seed": int(seed), "chosen_rank": int(rank),
         "iterations": int(result.iterations), "evaluations": int(result.evaluations),
-        "termination": result.reason, "seconds": round(seconds, 3),
-        "ms_per_iteration": round(1000 * seconds / max(result.iterations + 1, 1), 3),
+        "termination": result.reason,
         "objective": {"metric": problem.search.metric, "n_levels": levels.n_levels, "encoding": levels.encoding,
                       "kappa_grid": problem.search.kappas.tolist()},
         "ranges": {p: list(r) for p, r in ranges.items()},

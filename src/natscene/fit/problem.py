@@ -12,7 +12,7 @@ import dataclasses
 
 import numpy as np
 
-from natscene.fit.genetic import PARAMS
+from natscene.fit.genetic import PARAMS, fit_params
 from natscene.fit.kappa import KappaSearch
 from natscene.fit.objective import Levels
 from natscene.io import InputError
@@ -39,18 +39,23 @@ def restrict_tables(tables, mask: np.ndarray):
     return out
 
 
-def params_dict(values: np.ndarray, c_in, kappa=None) -> dict:
-    """The scatter contract's params for a population: values (P, 5) in PARAMS order."""
+def params_dict(values: np.ndarray, c_in, kappa=None, names: tuple = PARAMS, fixed: dict | None = None) -> dict:
+    """The scatter contract's params for a population: values (P, n) in ``names`` order, plus the ``fixed``
+    settings of the composition (all-orders transport: the sky dome's calibration and the ground albedo)."""
     v = np.atleast_2d(np.asarray(values, np.float64))
-    d = {name: v[:, i].astype(np.float32) for i, name in enumerate(PARAMS)}
+    d = {name: v[:, i].astype(np.float32) for i, name in enumerate(names)}
+    d.setdefault("L_amb", np.zeros(len(v), np.float32))
     d["c_in"] = np.asarray(c_in, np.float32).reshape(3)
     d["kappa_a"] = (np.zeros((len(v), 3), np.float32) if kappa is None
                     else np.asarray(kappa, np.float32).reshape(len(v), 3))
+    d.update(fixed or {})
     return d
 
 
 class FitProblem:
-    """O(c) for GA candidates c = (L_in, g, sigma_t, beta, L_amb), kappa_a searched per channel.
+    """O(c) for GA candidates c = (L_in, g, sigma_t, beta[, L_amb]) (:func:`natscene.fit.genetic.fit_params`
+    of the tables' transport), kappa_a searched per channel; ``fixed``: settings composed with every candidate
+    (all-orders transport: ``sky_scale``, ``ground_albedo``).
 
     ``tables``: a ``natscene.scatter.tables.Tables``; ``sky``, ``photo``: (H, W, 3) linear at the tables'
     resolution; ``photo_cloud``: (H, W) bool, the photo's cloud pixels; ``c_in``: (3,) sunlight colour.
@@ -59,12 +64,12 @@ class FitProblem:
 
     def __init__(self, tables, sky, photo, photo_cloud, c_in, levels: Levels | None = None,
                  metric: str = "difference", kappas=None, compose_cloud=None, apply_atmosphere=None,
-                 source: str = "fit"):
-        if compose_cloud is None or apply_atmosphere is None:
-            import importlib
-            _c = importlib.import_module("natscene.scatter.compose")
-            compose_cloud = compose_cloud or _c.compose_cloud
-            apply_atmosphere = apply_atmosphere or _c.apply_atmosphere
+                 source: str = "fit", fixed: dict | None = None):
+        import natscene.scatter.compose as _c
+        compose_cloud = compose_cloud or _c.compose_cloud
+        apply_atmosphere = apply_atmosphere or _c.apply_atmosphere
+        self.names = fit_params(getattr(tables, "transport", "dobashi"))
+        self.fixed = dict(fixed or {})
         self.compose_cloud, self.apply_atmosphere = compose_cloud, apply_atmosphere
         self.tables = tables
         self.sky = np.asarray(sky, np.float32)
@@ -97,7 +102,8 @@ class FitProblem:
 
     def cloud(self, values: np.ndarray) -> np.ndarray:
         """L_c (Eq. 4) at the footprint pixels: (P, N, 3)."""
-        out = self.compose_cloud(self.sub, params_dict(values, self.c_in), self.sky_sub)
+        out = self.compose_cloud(self.sub, params_dict(values, self.c_in, names=self.names, fixed=self.fixed),
+                                 self.sky_sub)
         out = np.asarray(out, np.float32)
         return out.reshape(out.shape[0], -1, 3)
 
@@ -108,8 +114,8 @@ class FitProblem:
         return self.search.search(self.cloud(values))
 
     def render(self, values: np.ndarray, kappa: np.ndarray) -> np.ndarray:
-        """Full synthetic images L_cg (Eq. 3 over Eq. 4) for parameter sets (P, 5) and kappa (P, 3): (P, H, W, 3)."""
-        params = params_dict(values, self.c_in, kappa)
+        """Full synthetic images L_cg (Eq. 3 over Eq. 4) for parameter sets (P, n) and kappa (P, 3): (P, H, W, 3)."""
+        params = params_dict(values, self.c_in, kappa, names=self.names, fixed=self.fixed)
         lc = np.asarray(self.compose_cloud(self.tables, params, self.sky), np.float32)
         return np.asarray(self.apply_atmosphere(lc, np.asarray(self.tables.t_c), params["kappa_a"], self.sky),
                           np.float32)

@@ -122,7 +122,8 @@ def render_shot_frame(volume, state: dict, shot: dict, mie: dict | None = None, 
     sky = sky_image(camera, sun, shot.get("sky") or {})
     timings["sky_s"] = time.perf_counter() - t
     t = time.perf_counter()
-    raw, comp = render(volume, camera, sun, p, sky, return_components=True, **dict(shot.get("render") or {}))
+    raw, comp = render(volume, camera, sun, p, sky, return_components=True, sky_settings=shot.get("sky"),
+                       **dict(shot.get("render") or {}))
     timings["render_s"] = time.perf_counter() - t
     d = dict(shot.get("denoiser") or {})
     t = time.perf_counter()

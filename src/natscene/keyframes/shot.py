@@ -18,7 +18,7 @@ from natscene.io import InputError
 from natscene.keyframes.interpolate import (catmull_rom, direction_to_sun_angles, ease, lerp, segment_t,
                                             slerp)
 
-PARAMS = ("L_in", "g", "sigma_t", "beta", "L_amb")  # scalars, interpolated linearly
+PARAMS = ("L_in", "g", "sigma_t", "beta", "L_amb")  # scalars, interpolated linearly (L_amb: dobashi transport, 0 if absent)
 COLOURS = ("c_in", "kappa_a")  # RGB triples, interpolated linearly per channel
 
 
@@ -74,7 +74,7 @@ def resolve_keyframe(shot_name: str, index: int, kf: dict, config: dict) -> dict
     out["camera"].setdefault("up", [0.0, 1.0, 0.0])
     out["camera"].setdefault("fov", 40.0)
     if fit is None:
-        missing = [p for p in PARAMS + COLOURS if p not in out["params"]]
+        missing = [p for p in PARAMS + COLOURS if p not in out["params"] and p != "L_amb"]
         if missing:
             raise InputError(f"config key '{_key(shot_name, index)}.params': {missing} missing; give them or "
                              f"name a fitted keyframe with 'fit'")
@@ -115,6 +115,7 @@ def keyframe_params(resolved: dict, fitted: dict | None, source: str = "") -> di
             raise InputError(f"{source}: no 'chosen' parameter set; rerun the fit rule")
         out.update({k: chosen[k] for k in PARAMS + COLOURS if k in chosen})
     out.update(resolved.get("params", {}))
+    out.setdefault("L_amb", 0.0)
     missing = [p for p in PARAMS + COLOURS if p not in out]
     if missing:
         raise InputError(f"{source or 'keyframe'}: parameters {missing} missing (neither fitted nor given)")

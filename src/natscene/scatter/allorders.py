@@ -64,13 +64,22 @@ class Lighting:
 
 @dataclass
 class ViewImages:
-    sun: np.ndarray                   # (B_sun, H, W)
-    sky: np.ndarray | None            # (4, B_sky, H, W) or None
+    """Band images of the two independent halves of the photons: ``sun_halves`` (2, B_sun, H, W),
+    ``sky_halves`` (2, 4, B_sky, H, W) or None; the bands' geometric ratios; counts."""
+
+    sun_halves: np.ndarray
+    sky_halves: np.ndarray | None
     sun_ratios: np.ndarray            # (B_sun,)
     sky_ratios: np.ndarray | None     # (B_sky,)
-    sun_se: np.ndarray                # (B_sun, H, W) standard error of ``sun``
-    sky_se: np.ndarray | None
     stats: dict = field(default_factory=dict)
+
+    @property
+    def sun(self) -> np.ndarray:
+        return self.sun_halves.mean(0)
+
+    @property
+    def sky(self) -> np.ndarray | None:
+        return None if self.sky_halves is None else self.sky_halves.mean(0)
 
 
 class Scene:
@@ -175,27 +184,23 @@ def view_images(scene: Scene, camera, sigma: float, g: float, seed: int = 0) -> 
     H, W = camera.height, camera.width
     nb_sun, nb_sky = len(st.sun_bands), len(st.sky_bands)
     if sigma <= 0:
-        z = np.zeros((nb_sun, H, W), np.float32)
-        zs = np.zeros((4, nb_sky, H, W), np.float32) if scene.sky is not None else None
-        return ViewImages(z, zs, np.ones(nb_sun), np.ones(nb_sky) if zs is not None else None, z.copy(),
-                          None if zs is None else zs.copy(), {})
+        sky = np.zeros((2, 4, nb_sky, H, W), np.float32) if scene.sky is not None else None
+        return ViewImages(np.zeros((2, nb_sun, H, W), np.float32), sky, np.ones(nb_sun),
+                          None if sky is None else np.ones(nb_sky), {})
     stats = {}
     n_sun = photons_for(scene, scene.sun, sigma, g, camera, st.sun_collisions, 10 ** 9, seed)
     sun_halves = _trace_halves(scene, scene.sun, sigma, g, camera, n_sun, st.sun_bands, 2, seed)
     sun_img = _images(scene, camera, sigma, sun_halves, st.sun_bands, 1)[:, 0]
-    sun_hist = sum(h.histogram for h in sun_halves)
-    stats["sun_truncated"] = float(max(h.truncated for h in sun_halves))
-    stats["sun_collisions"] = int(sum(h.collisions for h in sun_halves))
-    stats["sun_photons"] = int(sum(h.photons for h in sun_halves))
-    sky = sky_se = sky_r = None
+    stats.update(sun_photons=int(sum(h.photons for h in sun_halves)),
+                 sun_collisions=int(sum(h.collisions for h in sun_halves)),
+                 sun_truncated=float(max(h.truncated for h in sun_halves)))
+    sky_img = sky_r = None
     if scene.sky is not None:
         n_sky = photons_for(scene, scene.sky, sigma, g, camera, st.sky_collisions, 10 ** 9, seed + 7919)
         sky_halves = _trace_halves(scene, scene.sky, sigma, g, camera, n_sky, st.sky_bands, 1, seed + 7919)
         sky_img = _images(scene, camera, sigma, sky_halves, st.sky_bands, 4)
-        sky = sky_img.mean(0)
-        sky_se = standard_error(sky_img[0], sky_img[1])
         sky_r = fit_ratios(st.sky_bands, sum(h.histogram for h in sky_halves))
-        stats["sky_collisions"] = int(sum(h.collisions for h in sky_halves))
-        stats["sky_photons"] = int(sum(h.photons for h in sky_halves))
-    return ViewImages(sun_img.mean(0), sky, fit_ratios(st.sun_bands, sun_hist), sky_r,
-                      standard_error(sun_img[0], sun_img[1]), sky_se, stats)
+        stats.update(sky_photons=int(sum(h.photons for h in sky_halves)),
+                     sky_collisions=int(sum(h.collisions for h in sky_halves)))
+    return ViewImages(sun_img, sky_img, fit_ratios(st.sun_bands, sum(h.histogram for h in sun_halves)), sky_r,
+                      stats)

@@ -17,8 +17,8 @@ from __future__ import annotations
 
 import numpy as np
 
-SUN_BANDS = ((2, 2), (3, 3), (4, 4), (5, 8), (9, 16), (17, 32), (33, 64), (65, 128), (129, 256), (257, None))
-SKY_BANDS = ((1, 1), (2, 4), (5, 16), (17, 64), (65, None))
+SUN_BANDS = ((2, 2), (3, 3), (4, 4), (5, 8), (9, 16), (17, 32), (33, 64), (65, None))
+SKY_BANDS = ((1, 1), (2, 8), (9, None))
 
 
 def band_table(bands, max_order: int) -> np.ndarray:

@@ -9,8 +9,20 @@ For each parameter set (c_in, L_in, g, sigma_t, beta, L_amb, kappa_a) and pixel 
     L_c  = L_s + L_m + L_b                                                                (Eq. 4)
     L_cg = L_c e^{-kappa_a t_c} + (1 - e^{-kappa_a t_c}) L_sky                             (Eq. 3)
 
-with linear interpolation of the tables in sigma_t and g (bilinear for E_m^(k)); values outside a grid are
-clamped to its ends. The phase p(θ_q, g) is evaluated exactly (HG). Per individual, the interpolation is a
+(``transport: dobashi``), or, for the default all-orders transport (:mod:`natscene.scatter.allorders`),
+
+    L_c  = c_in L_in [beta p(θ_q, g) S_sun + Σ_b c_b(beta) T_b^sun]
+           + Σ_b c'_b(beta) [a ⊙ T_b^{sky,RGB} + G T_b^{ground}] + T L_sky,
+    G    = albedo / π (L_in c_in sin(el_sun) + a ⊙ E_dome)
+
+with every order of the sun's light in bands T_b^sun and every order of the skylight in bands T_b^sky
+(the dome's R, G, B channels and a unit-radiance ground), c_b(beta) the bands' closed-form albedo weights
+(:func:`natscene.scatter.bands.band_weights`), ``sky_scale`` a = the dome's calibration to the photo
+(:func:`natscene.scatter.skylight.calibration`), E_dome the dome's horizontal irradiance and G the radiance of
+a Lambertian ground of ``ground_albedo``. L_amb has no role there: the skylight replaces it.
+
+Linear interpolation of the tables in sigma_t and g (bilinear for the multiple scattering); values outside a
+grid are clamped to its ends. The phase p(θ_q, g) is evaluated exactly (HG). Per individual, the interpolation is a
 gather of the 2 x 2 bracketing (g, sigma_t) slices and the orders a (K,) @ (K, N) product with the weights
 L_in beta^k w_g w_s: O(P · 4K · N) work, nothing proportional to the grid sizes. The GA's fast path
 (``pixels=``) composes only the N pixels it needs from a pixel-compressed copy of the tables,
@@ -24,6 +36,7 @@ from natscene.io import InputError
 from natscene.scatter.phase import INV_4PI
 
 PARAM_KEYS = ("c_in", "L_in", "g", "sigma_t", "beta", "L_amb", "kappa_a")
+DEFAULT_GROUND_ALBEDO = 0.2
 
 
 try:  # a fused compiled kernel where numba is importable (it is a declared dependency); numpy otherwise
@@ -162,7 +175,11 @@ class PixelTables:
         self.multiple = np.ascontiguousarray(np.moveaxis(m, 0, 2), np.float32)
         self.cos_theta = np.ascontiguousarray(take(tables.cos_theta), np.float32)
         self.t_c = np.ascontiguousarray(take(tables.t_c), np.float32)
-        self.nbytes = self.single.nbytes + self.multiple.nbytes
+        self.sun_ms = self.sky_ms = None
+        if getattr(tables, "sun_ms", None) is not None:
+            self.sun_ms = np.ascontiguousarray(np.moveaxis(take(tables.sun_ms), 0, 2), np.float32)      # (Ng, Ns, B, N)
+            self.sky_ms = np.ascontiguousarray(np.moveaxis(take(tables.sky_ms), (0, 1), (2, 3)), np.float32)  # (Ng, Ns, 4, B', N)
+        self.nbytes = sum(a.nbytes for a in (self.single, self.multiple, self.sun_ms, self.sky_ms) if a is not None)
 
 
 def pixel_index(tables, pixels) -> np.ndarray:
@@ -220,6 +237,145 @@ def _compose_numba(p, sig, gs, orders, arrays, cos_t, sky, P, N):
     return out
 
 
+_KERNEL_AO = None
+
+
+def _numba_kernel_all_orders():
+    """Fused all-orders composition per (individual, pixel chunk), parallel over both (compiled once, cached)."""
+    global _KERNEL_AO
+    if _KERNEL_AO is None:
+        @_nb.njit(parallel=True, cache=True, fastmath=True)
+        def kernel(s_sun, s_T, sun_ms, sky_ms, cos_t, sky, sidx, ws, gidx, wsun, wsky, gpar, a_sun, c_in, a_sky, G,
+                   out):
+            P, N = out.shape[0], out.shape[1]
+            Bs, Bk = sun_ms.shape[2], sky_ms.shape[3]
+            nchunk = (N + _CHUNK - 1) // _CHUNK
+            for task in _nb.prange(P * nchunk):
+                j = task // nchunk
+                n0 = (task - j * nchunk) * _CHUNK
+                n1 = min(n0 + _CHUNK, N)
+                s0, s1 = sidx[j, 0], sidx[j, 1]
+                w0, w1 = ws[j, 0], ws[j, 1]
+                g = gpar[j]
+                c_ph = np.float32((1.0 - g * g) * 0.07957747154594767) * a_sun[j]
+                opg = np.float32(1.0 + g * g)
+                tg = np.float32(2.0 * g)
+                m = n1 - n0
+                acc = np.empty(m, np.float32)
+                acc_c = np.zeros((3, m), np.float32)
+                for n in range(m):
+                    q = n0 + n
+                    d = opg - tg * cos_t[q]
+                    acc[n] = c_ph / (d * np.sqrt(d)) * (w0 * s_sun[s0, q] + w1 * s_sun[s1, q])
+                for u in range(2):
+                    gi = gidx[j, u]
+                    for v in range(2):
+                        si = sidx[j, v]
+                        for b in range(Bs):
+                            w = wsun[j, u, v, b]
+                            if w != 0:
+                                row = sun_ms[gi, si, b]
+                                for n in range(m):
+                                    acc[n] += w * row[n0 + n]
+                        for b in range(Bk):
+                            w = wsky[j, u, v, b]
+                            if w != 0:
+                                gr = sky_ms[gi, si, 3, b]
+                                for c in range(3):
+                                    wa = w * a_sky[j, c]
+                                    wg = w * G[j, c]
+                                    rc = sky_ms[gi, si, c, b]
+                                    for n in range(m):
+                                        acc_c[c, n] += wa * rc[n0 + n] + wg * gr[n0 + n]
+                for n in range(m):
+                    q = n0 + n
+                    t = w0 * s_T[s0, q] + w1 * s_T[s1, q]
+                    for c in range(3):
+                        out[j, q, c] = acc[n] * c_in[j, c] + acc_c[c, n] + t * sky[q, c]
+        _KERNEL_AO = kernel
+    return _KERNEL_AO
+
+
+def _pop3(params: dict, key: str, P: int, default) -> np.ndarray:
+    v = np.asarray(params.get(key, default), np.float64)
+    if v.ndim == 0 or v.size == 1:
+        v = np.full(3, float(v.reshape(-1)[0]))
+    if v.ndim == 1 and v.size == 3:
+        v = np.broadcast_to(v, (P, 3))
+    if v.shape != (P, 3):
+        raise InputError(f"compose: '{key}' must be a scalar, 3 values or (P, 3), got shape {v.shape}")
+    return np.ascontiguousarray(v, np.float32)
+
+
+def all_orders_weights(tables, p: dict, P: int):
+    """Per individual: the (sigma_t, g) brackets and the band weights of the all-orders composition.
+
+    Returns sidx, gidx (P, 2), ws (P, 2), wsun (P, 2, 2, B) = w_g w_s L_in c_b(beta), wsky (P, 2, 2, B')
+    = w_g w_s c'_b(beta), a (P, 3) the dome's calibration, G (P, 3) the ground radiance."""
+    from natscene.scatter.bands import band_weights
+    sig = np.asarray(tables.sigma_t, np.float64)
+    gs = np.asarray(tables.g, np.float64)
+    sb, kb = tables.sun_bands, tables.sky_bands
+    sidx = np.zeros((P, 2), np.int64)
+    gidx = np.zeros((P, 2), np.int64)
+    ws = np.zeros((P, 2), np.float32)
+    wsun = np.zeros((P, 2, 2, len(sb)), np.float32)
+    wsky = np.zeros((P, 2, 2, len(kb)), np.float32)
+    for j in range(P):
+        si, fs = _bracket(sig, p["sigma_t"][j])
+        gi, fg = _bracket(gs, p["g"][j])
+        sidx[j] = (si, min(si + 1, sig.size - 1))
+        gidx[j] = (gi, min(gi + 1, gs.size - 1))
+        ws[j] = (1.0 - fs, fs)
+        beta = p["beta"][j]
+        for u, wg in enumerate((1.0 - fg, fg)):
+            for v, wsv in enumerate((1.0 - fs, fs)):
+                if wg * wsv == 0:
+                    continue
+                g_n, s_n = gidx[j, u], sidx[j, v]
+                wsun[j, u, v] = wg * wsv * p["L_in"][j] * band_weights(sb, tables.sun_ratios[g_n, s_n], beta)[0]
+                wsky[j, u, v] = wg * wsv * band_weights(kb, tables.sky_ratios[g_n, s_n], beta)[0]
+    sl = tables.meta.get("skylight", {})
+    a = _pop3(p, "sky_scale", P, 1.0)
+    albedo = _pop3(p, "ground_albedo", P, DEFAULT_GROUND_ALBEDO)
+    e_dome = np.asarray(sl.get("irradiance_rgb", [0.0, 0.0, 0.0]), np.float64)
+    sin_el = max(float(sl.get("sun_elevation_sin", 0.0)), 0.0)
+    G = albedo / np.pi * (p["L_in"][:, None] * p["c_in"] * sin_el + a * e_dome[None])
+    return sidx, gidx, ws, wsun, wsky, a, G.astype(np.float32)
+
+
+def _compose_all_orders(tables, p: dict, P: int, arrays, cos_t, sky, N: int, backend: str) -> np.ndarray:
+    """L_c (P, N, 3) of the all-orders transport; ``arrays`` = (S_sun (Ns, N), T (Ns, N), sun (Ng, Ns, B, N),
+    sky (Ng, Ns, 4, B', N))."""
+    s_sun, s_T, sun_ms, sky_ms = arrays
+    sidx, gidx, ws, wsun, wsky, a, G = all_orders_weights(tables, p, P)
+    a_sun = (p["L_in"] * p["beta"]).astype(np.float32)
+    c_in = p["c_in"].astype(np.float32)
+    out = np.empty((P, N, 3), np.float32)
+    if _nb is not None and backend != "numpy":
+        _numba_kernel_all_orders()(s_sun, s_T, sun_ms, sky_ms, np.asarray(cos_t, np.float32),
+                                   np.ascontiguousarray(sky, np.float32), sidx, ws, gidx, wsun, wsky,
+                                   p["g"].astype(np.float32), a_sun, c_in, a, G, out)
+        return out
+    for j in range(P):
+        g = float(p["g"][j])
+        denom = np.float32(1.0 + g * g) - np.float32(2.0 * g) * cos_t
+        phase = np.float32((1.0 - g * g) * INV_4PI) / (denom * np.sqrt(denom))
+        acc = a_sun[j] * phase * (ws[j, 0] * s_sun[sidx[j, 0]] + ws[j, 1] * s_sun[sidx[j, 1]])
+        acc_c = np.zeros((3, N), np.float32)
+        for u in range(2):
+            for v in range(2):
+                gi, si = gidx[j, u], sidx[j, v]
+                if wsun[j, u, v].any():
+                    acc += wsun[j, u, v] @ sun_ms[gi, si]
+                if wsky[j, u, v].any():
+                    k = np.tensordot(wsky[j, u, v], sky_ms[gi, si], axes=(0, 1))    # (4, N)
+                    acc_c += a[j][:, None] * k[:3] + G[j][:, None] * k[3][None]
+        t = ws[j, 0] * s_T[sidx[j, 0]] + ws[j, 1] * s_T[sidx[j, 1]]
+        out[j] = (acc[:, None] * c_in[j][None] + acc_c.T + t[:, None] * sky).astype(np.float32)
+    return out
+
+
 def compose_cloud(tables, params: dict, sky, pixels=None, backend: str = "auto") -> np.ndarray:
     """L_c of Eq. 4 (no atmosphere) for a population of parameter sets.
 
@@ -237,9 +393,15 @@ def compose_cloud(tables, params: dict, sky, pixels=None, backend: str = "auto")
     orders = np.asarray(tables.orders, np.float64)
     K = orders.size
     H, W = tables.t_c.shape
+    all_orders = getattr(tables, "transport", "dobashi") == "all_orders"
     if pixels is None:
         sky = _check_sky(tables, sky).reshape(-1, 3)
         N, Ns, Ng = H * W, sig.size, gs.size
+        if all_orders:   # the pixel-compressed layout of every pixel (cached on the tables)
+            pt = pixel_tables(tables, np.arange(N))
+            out = _compose_all_orders(tables, p, P, (pt.single[:, 0], pt.single[:, 2], pt.sun_ms, pt.sky_ms),
+                                      pt.cos_theta, sky, N, backend)
+            return out.reshape(P, H, W, 3)
         single = (tables.s_sun.reshape(Ns, N), tables.s_amb.reshape(Ns, N), tables.transmittance.reshape(Ns, N))
         M = tables.multiple.reshape(K, Ng, Ns, N)
         cos_t = tables.cos_theta.reshape(N)
@@ -258,6 +420,9 @@ def compose_cloud(tables, params: dict, sky, pixels=None, backend: str = "auto")
             raise InputError(f"compose: sky has shape {s.shape}; expected the full ({H}, {W}, 3) image or the "
                              f"selected pixels ({N}, 3) (results/sky/<photo>/{W}x{H}/sky.exr)")
         cos_t = pt.cos_theta
+        if all_orders:
+            return _compose_all_orders(tables, p, P, (pt.single[:, 0], pt.single[:, 2], pt.sun_ms, pt.sky_ms), cos_t,
+                                       np.ascontiguousarray(sky, np.float32), N, backend)
         get_single = lambda i: pt.single[i]              # noqa: E731
         get_mult = lambda gi, si: pt.multiple[gi, si]    # noqa: E731
         get_arrays = lambda: (pt.single[:, 0], pt.single[:, 1], pt.single[:, 2], pt.multiple)  # noqa: E731

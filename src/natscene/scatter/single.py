@@ -4,7 +4,8 @@ For every view ray and every sigma_t of a grid, in ONE march (mu_t = sigma_t · 
 ``extinction_scale``; O(t) = ∫_0^t rho; D(x) the sun optical depth of :mod:`natscene.scatter.medium`):
 
 - S_sun(q, sigma_t) = ∫ sigma_t k rho(x) tau(x_l, x) tau(x_v, x) dt, with tau(x_l, x) = exp(-sigma_t k D(x)),
-- S_amb(q, sigma_t) = ∫ rho(x) tau(x_v, x) dt,
+- S_amb(q, sigma_t) = ∫ rho(x) tau(x_v, x) dt / L, L the longest side of the volume's box (the ambient term is
+  dimensionless: Dobashi's L_amb keeps its meaning for a cloud of any size in metres),
 - T(q, sigma_t) = tau(x_v, x_b) = exp(-sigma_t k O(T)) (Eq. 9),
 
 integrated segment by segment exactly for a density that is constant over a step (midpoint value):
@@ -79,7 +80,8 @@ def march_view(med: Medium, camera, sigmas, step_voxels: float = 0.5, supersampl
                                         med.sun_depth_tex is not None)
     T = [pixel_mean(dr.exp(-s * med.scale * depth), supersample, W, H) for s in sigmas]
     S_sun = [pixel_mean(x, supersample, W, H) for x in s_sun]
-    S_amb = [pixel_mean(x, supersample, W, H) for x in s_amb]
+    size = float(np.max(med.bbox_max - med.bbox_min))
+    S_amb = [pixel_mean(x, supersample, W, H) / size for x in s_amb]
     hit = t_hit >= 0
     n_hit = pixel_mean(mi.Float(hit), supersample, W, H)
     t_sum = pixel_mean(dr.select(hit, t_hit, 0.0), supersample, W, H)

@@ -1,21 +1,33 @@
-"""The precomputed intermediate images of Dobashi 2012 §4.3 for one volume, camera and sun.
+"""The precomputed intermediate images for one volume, camera and sun (Dobashi 2012 §4.3), for either
+transport model (``precompute.transport``).
 
 For a sigma_t grid (default 0, 0.1, ..., 1) and a g grid (default 0, 0.1, ..., 0.9: HG with g -> 1 is a
 delta lobe, 0.9 is the documented maximum), the tables hold, per pixel q:
 
 - ``s_sun``, ``s_amb`` (Ns, H, W): the two integrals of Eq. 5 (:mod:`natscene.scatter.single`);
 - ``transmittance`` (Ns, H, W): tau(x_v, x_b, sigma_t) of Eq. 9;
-- ``multiple`` (K, Ng, Ns, H, W): E_m^(k)(q, g, sigma_t) of Eq. 7 for k in ``orders`` = 2..n_m
-  (:mod:`natscene.scatter.multiple`, all g from the same paths, one path-tracing pass per sigma_t > 0);
 - ``t_c`` (H, W): distance from the camera to the cloud (first sample with rho >= ``rho_threshold``)
-  divided by the camera-to-volume distance (camera to bbox centre), DESIGN §3; 0 where no cloud;
+  divided by the camera-to-volume distance (camera to bbox centre); 0 where no cloud;
 - ``cos_theta`` (H, W): cosine of θ_q, the angle between the sun's propagation direction and the
   direction toward the camera (= dot(sun_dir, view_dir));
-- ``footprint`` (H, W): 1 where the view ray meets the cloud.
+- ``footprint`` (H, W): 1 where the view ray meets the cloud;
+
+and the multiple scattering of the chosen transport:
+
+- ``transport: all_orders`` (the default, :mod:`natscene.scatter.allorders`): ``sun_ms`` (B, Ng, Ns, H, W),
+  every order >= 2 of the sun's light grouped into bands of orders, and ``sky_ms`` (4, B', Ng, Ns, H, W),
+  every order >= 1 of the skylight for the dome's R, G, B distributions and a unit-radiance ground, both
+  without the albedo, with the bands' geometric ratios (``sun_ratios``, ``sky_ratios``: (Ng, Ns, B)) that
+  make beta compose in closed form (:mod:`natscene.scatter.bands`);
+- ``transport: dobashi`` (the paper): ``multiple`` (K, Ng, Ns, H, W), E_m^(k)(q, g, sigma_t) of Eq. 7 for k in
+  ``orders`` = 2..n_m (:mod:`natscene.scatter.multiple`), plus the ambient term through ``s_amb``.
 
 On disk (``results/precompute/{volume}/{view}/``): ``single.exr`` (channels ``sun.s<σ>``, ``amb.s<σ>``),
-``transmittance.exr`` (``T.s<σ>``), ``multiple.exr`` (``k<k>.g<g>.s<σ>``), ``geometry.exr``
-(``t_c``, ``cos_theta``, ``footprint``), all float32, and ``meta.yaml`` (grids, spp, timings, view).
+``transmittance.exr`` (``T.s<σ>``), ``geometry.exr`` (``t_c``, ``cos_theta``, ``footprint``), then
+``allorders.exr`` (``sun.b<i>.g<g>.s<σ>``, ``sky.<R|G|B|ground>.b<i>.g<g>.s<σ>``; half floats, each channel
+divided by its maximum, the maxima in the header) or ``multiple.exr`` (``k<k>.g<g>.s<σ>``, float32), and
+``meta.yaml`` (grids, bands and ratios, the sky dome, sample counts, noise). No wall-clock time is written
+into any of them (timings go to the log): a rerun gives the same bytes.
 """
 from __future__ import annotations
 
@@ -26,6 +38,9 @@ from pathlib import Path
 import numpy as np
 
 from natscene.io import InputError, read_exr, read_yaml, write_exr, write_yaml
+
+TRANSPORTS = ("all_orders", "dobashi")
+SKY_CHANNELS = ("R", "G", "B", "ground")
 
 DEFAULT_SIGMAS = tuple(np.round(np.arange(11) * 0.1, 6))
 DEFAULT_GS = tuple(np.round(np.arange(10) * 0.1, 6))
@@ -44,14 +59,22 @@ class Tables:
     cos_theta: np.ndarray        # (H, W)
     footprint: np.ndarray        # (H, W)
     meta: dict = field(default_factory=dict)
+    transport: str = "dobashi"
+    sun_bands: tuple = ()
+    sky_bands: tuple = ()
+    sun_ms: np.ndarray | None = None       # (B, Ng, Ns, H, W)
+    sky_ms: np.ndarray | None = None       # (4, B', Ng, Ns, H, W)
+    sun_ratios: np.ndarray | None = None   # (Ng, Ns, B)
+    sky_ratios: np.ndarray | None = None   # (Ng, Ns, B')
 
     @property
     def shape(self) -> tuple[int, int]:
         return self.t_c.shape
 
     def nbytes(self) -> int:
-        return int(sum(a.nbytes for a in (self.s_sun, self.s_amb, self.transmittance, self.multiple, self.t_c,
-                                          self.cos_theta, self.footprint)))
+        arrays = (self.s_sun, self.s_amb, self.transmittance, self.multiple, self.t_c, self.cos_theta,
+                  self.footprint, self.sun_ms, self.sky_ms)
+        return int(sum(a.nbytes for a in arrays if a is not None))
 
 
 def _tag(x: float) -> str:
@@ -86,41 +109,27 @@ def geometry_images(camera, volume, sun_dir, t_hit: np.ndarray) -> tuple[np.ndar
     return t_c.astype(np.float32), cos_t.astype(np.float32), foot.astype(np.float32)
 
 
-def precompute(volume, camera, sun_dir, sigmas=DEFAULT_SIGMAS, gs=DEFAULT_GS, n_m: int = 4, spp: int = 256,
-               seed: int = 0, step_voxels: float = 0.5, supersample: int = 4, rho_threshold: float = 0.01,
-               batch_spp: int | None = None, with_error: bool = True, log=None) -> Tables:
-    """All tables for one volume, camera and sun (see the module docstring)."""
-    from natscene.scatter.medium import make_medium
-    from natscene.scatter.multiple import trace_orders
-    from natscene.scatter.single import march_view
+def _stats(values: list) -> dict | None:
+    v = np.concatenate(values) if values else np.zeros(0)
+    return {"median": float(np.median(v)), "p95": float(np.percentile(v, 95))} if v.size else None
 
-    sigmas = check_grid(sigmas, "sigma_t", 0.0, 1e6)
-    gs = check_grid(gs, "g", -1.0, 1.0, hi_open=True)
-    if n_m < 1:
-        raise InputError(f"config key 'precompute.n_m': must be >= 1, got {n_m}")
-    log = log or (lambda msg: None)
-    timings = {}
-    t0 = time.perf_counter()
-    med = make_medium(volume, sun_dir)
-    timings["sun_depth_s"] = time.perf_counter() - t0
-    t1 = time.perf_counter()
-    single = march_view(med, camera, sigmas, step_voxels=step_voxels, supersample=supersample,
-                        rho_threshold=rho_threshold)
-    timings["single_s"] = time.perf_counter() - t1
-    log(f"single scattering + transmittance marched for {len(sigmas)} sigma_t in {timings['single_s']:.1f} s")
+
+def _dobashi_multiple(med, camera, sigmas, gs, single, n_m, spp, seed, batch_spp, with_error, log):
+    """E_m^(k) (K, Ng, Ns, H, W) by per-order path tracing (Eq. 7) and its noise figures."""
+    from natscene.scatter.multiple import trace_orders
+    from natscene.scatter.phase import hg
+    from scipy.ndimage import binary_dilation
     orders = list(range(2, n_m + 1))
     H, W = camera.height, camera.width
     multiple = np.zeros((len(orders), len(gs), len(sigmas), H, W), np.float32)
     single_cos = camera.ray_directions() @ (med.sun_dir / np.linalg.norm(med.sun_dir))
-    rel_se = {k: [] for k in orders}
     foot = single["footprint"] > 0
     # only pixels whose view rays meet any density can score (T < 1 at the largest sigma_t), dilated by
     # one pixel for jittered rays at the silhouette; the others are exactly 0 and are not traced
-    from scipy.ndimage import binary_dilation
     traced = np.flatnonzero(binary_dilation(single["T"][-1] < 1, iterations=1)) if sigmas[-1] > 0 else None
+    rel_se = {k: [] for k in orders}
     weighted = {k: [] for k in orders}
     weighted_sum = []
-    t2 = time.perf_counter()
     for i, s in enumerate(sigmas):
         if s <= 0 or not orders:
             continue
@@ -136,7 +145,6 @@ def precompute(volume, camera, sun_dir, sigmas=DEFAULT_SIGMAS, gs=DEFAULT_GS, n_
                 rel_se[k].append((u[ok] / e[ok]).astype(np.float32))
             # the same noise relative to the pixel's composed cloud radiance at beta = 1, L_amb = 0:
             # L = p(theta_q, g) S_sun + sum_k E^(k) (what the noise does to the image the GA sees)
-            from natscene.scatter.phase import hg
             L = hg(single_cos[foot][None], gs[:, None]) * single["S_sun"][i][foot][None] + est[1:][:, :, foot].sum(0)
             okL = L > 0
             for ki, k in enumerate(orders):
@@ -145,60 +153,206 @@ def precompute(volume, camera, sun_dir, sigmas=DEFAULT_SIGMAS, gs=DEFAULT_GS, n_
             weighted_sum.append((tot[okL] / L[okL]).astype(np.float32))
         log(f"multiple scattering sigma_t={s:g}: orders {orders[0]}..{n_m}, {len(gs)} g, {spp} spp "
             f"in {time.perf_counter() - ts:.1f} s")
-    timings["multiple_s"] = time.perf_counter() - t2
-    timings["total_s"] = time.perf_counter() - t0
+    meta = {"orders": orders, "n_m": int(n_m), "spp": int(spp)}
+    if with_error and orders:
+        meta["relative_standard_error"] = {f"k{k}": _stats(v) for k, v in rel_se.items()}
+        # standard error of E^(k) divided by the pixel's composed radiance (beta = 1, no ambient), and of
+        # sum_k E^(k) (orders' errors combined in quadrature), over cloud pixels, all sigma_t > 0 and g
+        meta["pixel_relative_standard_error"] = {**{f"k{k}": _stats(v) for k, v in weighted.items()},
+                                                 "sum": _stats(weighted_sum)}
+        meta["traced_pixels"] = int(H * W if traced is None else traced.size)
+    return orders, multiple, meta
+
+
+NOISE_BETAS = (0.9, 0.99, 0.999)
+
+
+def skylight_dome(sun_dir, sky: dict | None):
+    """The sky dome that lights the cloud for the precompute and its settings (``precompute.skylight``)."""
+    from natscene.scatter.skylight import daylight_dome
+    sky = dict(sky or {})
+    model = sky.get("model", "preetham")
+    if model != "preetham":
+        raise InputError(f"config key 'precompute.skylight.model': unknown sky model {model!r} (preetham)")
+    return daylight_dome(sun_dir, float(sky.get("turbidity", 3.0)))
+
+
+def _all_orders_multiple(volume, camera, sun_dir, sigmas, gs, settings, sky, seed, log):
+    """Band images of the sun's and the sky's light over the (g, sigma_t) grid, their ratios and noise."""
+    from natscene.scatter.allorders import Lighting, Scene, view_images
+    from natscene.scatter.bands import band_weights
+    from natscene.scatter.skylight import irradiance
+    from natscene.sky.daylight import preetham_rgb
+    dome = skylight_dome(sun_dir, sky)
+    scene = Scene(volume, Lighting(np.asarray(sun_dir, np.float64), dome), settings)
+    H, W = camera.height, camera.width
+    Ng, Ns = len(gs), len(sigmas)
+    sb, kb = settings.sun_bands, settings.sky_bands
+    sun_ms = np.zeros((len(sb), Ng, Ns, H, W), np.float32)
+    sky_ms = np.zeros((4, len(kb), Ng, Ns, H, W), np.float32)
+    sun_r = np.ones((Ng, Ns, len(sb)))
+    sky_r = np.ones((Ng, Ns, len(kb)))
+    noise = {f"sun.beta{b:g}": [] for b in NOISE_BETAS}
+    noise.update({f"sky.beta{b:g}": [] for b in NOISE_BETAS})
+    counts = {"sun_photons": 0, "sun_collisions": 0, "sky_photons": 0, "sky_collisions": 0}
+    truncated = 0.0
+    from natscene.scatter.allorders import standard_error
+    todo = [(i, j) for i in range(Ns) if sigmas[i] > 0 for j in range(Ng)]
+    t0 = time.perf_counter()
+    foot = None
+    for n, (i, j) in enumerate(todo):
+        vi = view_images(scene, camera, float(sigmas[i]), float(gs[j]), seed=seed * 100003 + i * 101 + j)
+        sun_ms[:, j, i] = vi.sun
+        sky_ms[:, :, j, i] = vi.sky
+        sun_r[j, i], sky_r[j, i] = vi.sun_ratios, vi.sky_ratios
+        for k in counts:
+            counts[k] += int(vi.stats.get(k, 0))
+        truncated = max(truncated, vi.stats.get("sun_truncated", 0.0))
+        if foot is None:
+            from natscene.scatter.single import march_view
+            foot = march_view(scene.med, camera, [float(sigmas[-1])], settings.step_voxels,
+                              settings.supersample)["footprint"] > 0
+        for b in NOISE_BETAS:
+            cs = band_weights(sb, vi.sun_ratios, b)[0]
+            ck = band_weights(kb, vi.sky_ratios, b)[0]
+            halves = [np.tensordot(cs, vi.sun_halves[h], 1) for h in range(2)]
+            sky_halves = [np.tensordot(ck, vi.sky_halves[h][:3].sum(0), 1) for h in range(2)]
+            for key, (x, y) in ((f"sun.beta{b:g}", halves), (f"sky.beta{b:g}", sky_halves)):
+                m = (x + y) / 2
+                se = standard_error(x, y)
+                ok = foot & (m > 0)
+                noise[key].append((se[ok] / m[ok]).astype(np.float32))
+        el = time.perf_counter() - t0
+        log(f"all orders sigma_t={sigmas[i]:g} g={gs[j]:g}: {vi.stats.get('sun_photons', 0)} sun + "
+            f"{vi.stats.get('sky_photons', 0)} sky photons ({n + 1}/{len(todo)}, {el:.0f} s, "
+            f"about {el / (n + 1) * (len(todo) - n - 1):.0f} s left)")
+    dirs = camera.ray_directions()
+    view_rgb = preetham_rgb(dirs.reshape(-1, 3), sun_dir, float((sky or {}).get("turbidity", 3.0))).reshape(-1, 3)
+    s = np.asarray(sun_dir, np.float64)
+    meta = {
+        "sun_bands": [[a, e] for a, e in sb], "sky_bands": [[a, e] for a, e in kb],
+        "sun_ratios": np.round(sun_r, 6).tolist(), "sky_ratios": np.round(sky_r, 6).tolist(),
+        "skylight": {"model": "preetham", "turbidity": float((sky or {}).get("turbidity", 3.0)),
+                     "view_mean_rgb": view_rgb.mean(0).tolist(), "irradiance_rgb": irradiance(dome).tolist(),
+                     "sun_elevation_sin": float(s[1] / np.linalg.norm(s))},
+        "photons": counts, "truncated_light": float(truncated),
+        "settings": {"sun_collisions": int(settings.sun_collisions), "sky_collisions": int(settings.sky_collisions),
+                     "fine_voxels": int(settings.fine_voxels), "coarse_voxels": int(settings.coarse_voxels),
+                     "guide_width": [float(x) for x in settings.guide_width], "max_order": int(settings.max_order),
+                     "majorant_voxels": int(settings.majorant_voxels)},
+        # per-pixel standard error of the composed multiple-scattering term divided by the term, over the
+        # cloud pixels and every (g, sigma_t) node: the sun's (orders >= 2) and the sky's (R+G+B, orders >= 1)
+        "pixel_relative_standard_error": {k: _stats(v) for k, v in noise.items()},
+    }
+    return sun_ms, sky_ms, sun_r, sky_r, meta
+
+
+def precompute(volume, camera, sun_dir, sigmas=DEFAULT_SIGMAS, gs=DEFAULT_GS, n_m: int = 4, spp: int = 256,
+               seed: int = 0, step_voxels: float = 0.5, supersample: int = 4, rho_threshold: float = 0.01,
+               batch_spp: int | None = None, with_error: bool = True, log=None, transport: str = "all_orders",
+               all_orders=None, skylight: dict | None = None) -> Tables:
+    """All tables for one volume, camera and sun (see the module docstring)."""
+    from natscene.scatter.allorders import AllOrdersSettings
+    from natscene.scatter.medium import make_medium
+    from natscene.scatter.single import march_view
+
+    if transport not in TRANSPORTS:
+        raise InputError(f"config key 'precompute.transport': unknown transport {transport!r} "
+                         f"(one of {', '.join(TRANSPORTS)})")
+    sigmas = check_grid(sigmas, "sigma_t", 0.0, 1e6)
+    gs = check_grid(gs, "g", -1.0, 1.0, hi_open=True)
+    if n_m < 1:
+        raise InputError(f"config key 'precompute.n_m': must be >= 1, got {n_m}")
+    if spp < 1:
+        raise InputError(f"config key 'precompute.spp': must be >= 1, got {spp}")
+    log = log or (lambda msg: None)
+    t0 = time.perf_counter()
+    med = make_medium(volume, sun_dir)
+    single = march_view(med, camera, sigmas, step_voxels=step_voxels, supersample=supersample,
+                        rho_threshold=rho_threshold)
+    log(f"single scattering + transmittance marched for {len(sigmas)} sigma_t in {time.perf_counter() - t0:.1f} s")
+    H, W = camera.height, camera.width
     t_c, cos_t, footprint = geometry_images(camera, volume, med.sun_dir, single["t_hit"])
-    meta = {"sigma_t": sigmas.tolist(), "g": gs.tolist(), "orders": orders, "n_m": int(n_m), "spp": int(spp),
-            "seed": int(seed), "step_voxels": float(step_voxels), "supersample": int(supersample),
+    meta = {"transport": transport, "sigma_t": sigmas.tolist(), "g": gs.tolist(), "seed": int(seed),
+            "step_voxels": float(step_voxels), "supersample": int(supersample),
             "rho_threshold": float(rho_threshold), "resolution": [W, H],
             "camera": {"position": list(camera.position), "look_at": list(camera.look_at), "up": list(camera.up),
                        "fov": camera.fov},
             "sun_dir": med.sun_dir.tolist(), "extinction_scale": float(volume.extinction_scale),
-            "reference_distance": reference_distance(camera, volume),
-            "footprint_pixels": int(footprint.sum()), "timings": timings}
-    if with_error and orders:
-        meta["relative_standard_error"] = {
-            f"k{k}": ({"median": float(np.median(np.concatenate(v))), "p95": float(np.percentile(np.concatenate(v), 95))}
-                      if v and np.concatenate(v).size else None) for k, v in rel_se.items()}
-
-        def stats(v):
-            v = np.concatenate(v) if v else np.zeros(0)
-            return {"median": float(np.median(v)), "p95": float(np.percentile(v, 95))} if v.size else None
-        # standard error of E^(k) divided by the pixel's composed radiance (beta = 1, no ambient), and of
-        # sum_k E^(k) (orders' errors combined in quadrature), over cloud pixels, all sigma_t > 0 and g
-        meta["pixel_relative_standard_error"] = {**{f"k{k}": stats(v) for k, v in weighted.items()},
-                                                 "sum": stats(weighted_sum)}
-        meta["traced_pixels"] = int(H * W if traced is None else traced.size)
+            "reference_distance": reference_distance(camera, volume), "footprint_pixels": int(footprint.sum())}
+    extra = {}
+    if transport == "dobashi":
+        orders, multiple, m = _dobashi_multiple(med, camera, sigmas, gs, single, n_m, spp, seed, batch_spp,
+                                                with_error, log)
+        meta.update(m)
+    else:
+        orders, multiple = [], np.zeros((0, len(gs), len(sigmas), H, W), np.float32)
+        settings = all_orders if all_orders is not None else AllOrdersSettings()
+        sun_ms, sky_ms, sun_r, sky_r, m = _all_orders_multiple(volume, camera, med.sun_dir, sigmas, gs, settings,
+                                                               skylight, seed, log)
+        meta.update(m)
+        extra = {"transport": transport, "sun_bands": tuple(settings.sun_bands),
+                 "sky_bands": tuple(settings.sky_bands), "sun_ms": sun_ms, "sky_ms": sky_ms,
+                 "sun_ratios": sun_r, "sky_ratios": sky_r}
+    log(f"precompute done in {time.perf_counter() - t0:.1f} s")
     return Tables(sigmas, gs, orders, single["S_sun"], single["S_amb"], single["T"], multiple, t_c, cos_t,
-                  footprint, meta)
+                  footprint, meta, **extra)
+
+
+def table_files(transport: str) -> tuple[str, ...]:
+    """The files :func:`save_tables` writes for ``transport`` (the precompute rule's outputs)."""
+    return ("single.exr", "transmittance.exr", "allorders.exr" if transport == "all_orders" else "multiple.exr",
+            "geometry.exr", "meta.yaml")
+
+
+def _allorders_names(tables) -> list[str]:
+    sig = [_tag(s) for s in tables.sigma_t]
+    gt = [_tag(g) for g in tables.g]
+    names = [f"sun.b{b}.g{g}.s{s}" for b in range(len(tables.sun_bands)) for g in gt for s in sig]
+    names += [f"sky.{c}.b{b}.g{g}.s{s}" for c in SKY_CHANNELS for b in range(len(tables.sky_bands))
+              for g in gt for s in sig]
+    return names
 
 
 def save_tables(directory, tables: Tables, extra_meta: dict | None = None) -> dict:
-    """Write the five files of the precompute; returns the meta written (with file sizes)."""
+    """Write the files of the precompute (:func:`table_files`); returns the meta written (with file sizes)."""
     d = Path(directory)
     sig = [_tag(s) for s in tables.sigma_t]
     gt = [_tag(g) for g in tables.g]
-    attrs = {"sigma_t": tables.sigma_t.tolist(), "g": tables.g.tolist(), "orders": list(tables.orders)}
+    attrs = {"sigma_t": tables.sigma_t.tolist(), "g": tables.g.tolist(), "orders": list(tables.orders),
+             "transport": tables.transport}
     write_exr(d / "single.exr", np.concatenate([tables.s_sun, tables.s_amb]).transpose(1, 2, 0),
               [f"sun.s{s}" for s in sig] + [f"amb.s{s}" for s in sig], attrs=attrs, stage="precompute")
     write_exr(d / "transmittance.exr", tables.transmittance.transpose(1, 2, 0), [f"T.s{s}" for s in sig],
               attrs=attrs, stage="precompute")
-    K, Ng, Ns, H, W = tables.multiple.shape
-    names = [f"k{k}.g{g}.s{s}" for k in tables.orders for g in gt for s in sig]
-    if K:
-        write_exr(d / "multiple.exr", tables.multiple.reshape(K * Ng * Ns, H, W).transpose(1, 2, 0), names,
-                  attrs=attrs, stage="precompute")
+    H, W = tables.t_c.shape
+    if tables.transport == "all_orders":
+        data = np.concatenate([tables.sun_ms.reshape(-1, H, W), tables.sky_ms.reshape(-1, H, W)])
+        scale = data.reshape(len(data), -1).max(1).astype(np.float64)
+        scale[scale <= 0] = 1.0
+        # each channel divided by its maximum: half floats then keep 4.9e-4 relative precision over 14 octaves
+        write_exr(d / "allorders.exr", (data / scale[:, None, None]).transpose(1, 2, 0), _allorders_names(tables),
+                  attrs={**attrs, "channel_scale": scale.tolist()}, half=True, stage="precompute")
     else:
-        write_exr(d / "multiple.exr", np.zeros((H, W, 1), np.float32), ["none"], attrs=attrs, stage="precompute")
+        K, Ng, Ns = tables.multiple.shape[:3]
+        names = [f"k{k}.g{g}.s{s}" for k in tables.orders for g in gt for s in sig]
+        if K:
+            write_exr(d / "multiple.exr", tables.multiple.reshape(K * Ng * Ns, H, W).transpose(1, 2, 0), names,
+                      attrs=attrs, stage="precompute")
+        else:
+            write_exr(d / "multiple.exr", np.zeros((H, W, 1), np.float32), ["none"], attrs=attrs, stage="precompute")
     write_exr(d / "geometry.exr", np.stack([tables.t_c, tables.cos_theta, tables.footprint], -1),
               ["t_c", "cos_theta", "footprint"], attrs=attrs, stage="precompute")
     meta = dict(tables.meta)
     meta.update(extra_meta or {})
-    meta["files_bytes"] = {f: (d / f).stat().st_size for f in
-                           ("single.exr", "transmittance.exr", "multiple.exr", "geometry.exr")}
+    meta["files_bytes"] = {f: (d / f).stat().st_size for f in table_files(tables.transport) if f != "meta.yaml"}
     meta["memory_bytes"] = tables.nbytes()
     write_yaml(d / "meta.yaml", meta)
     return meta
+
+
+def _stack(img, names, H, W) -> np.ndarray:
+    return np.moveaxis(img.channel(*names).reshape(H, W, -1), -1, 0)
 
 
 def load_tables(directory) -> Tables:
@@ -208,28 +362,47 @@ def load_tables(directory) -> Tables:
     try:
         sigmas = np.asarray(meta["sigma_t"], np.float64)
         gs = np.asarray(meta["g"], np.float64)
-        orders = [int(k) for k in meta["orders"]]
+        transport = meta.get("transport", "dobashi")
+        orders = [int(k) for k in meta.get("orders", [])]
     except (KeyError, TypeError) as e:
         raise InputError(f"{d / 'meta.yaml'}: missing key {e}; rerun the precompute rule") from e
+    if transport not in TRANSPORTS:
+        raise InputError(f"{d / 'meta.yaml'}: unknown transport {transport!r}; rerun the precompute rule")
     sig = [_tag(s) for s in sigmas]
     gt = [_tag(g) for g in gs]
     single = read_exr(d / "single.exr")
     trans = read_exr(d / "transmittance.exr")
     geo = read_exr(d / "geometry.exr")
+    extra = {}
     try:
-        s_sun = np.moveaxis(single.channel(*[f"sun.s{s}" for s in sig]).reshape(*single.pixels.shape[:2], -1), -1, 0)
-        s_amb = np.moveaxis(single.channel(*[f"amb.s{s}" for s in sig]).reshape(*single.pixels.shape[:2], -1), -1, 0)
-        T = np.moveaxis(trans.channel(*[f"T.s{s}" for s in sig]).reshape(*trans.pixels.shape[:2], -1), -1, 0)
         H, W = geo.pixels.shape[:2]
-        if orders:
+        s_sun = _stack(single, [f"sun.s{s}" for s in sig], H, W)
+        s_amb = _stack(single, [f"amb.s{s}" for s in sig], H, W)
+        T = _stack(trans, [f"T.s{s}" for s in sig], H, W)
+        multiple = np.zeros((0, len(gs), len(sigmas), H, W), np.float32)
+        if transport == "dobashi" and orders:
             mult = read_exr(d / "multiple.exr")
             names = [f"k{k}.g{g}.s{s}" for k in orders for g in gt for s in sig]
-            m = mult.channel(*names).reshape(H, W, -1)
-            multiple = np.ascontiguousarray(np.moveaxis(m, -1, 0).reshape(len(orders), len(gs), len(sigmas), H, W))
-        else:
-            multiple = np.zeros((0, len(gs), len(sigmas), H, W), np.float32)
+            multiple = np.ascontiguousarray(_stack(mult, names, H, W).reshape(len(orders), len(gs), len(sigmas), H, W))
+        elif transport == "all_orders":
+            sb = tuple((int(a), None if e is None else int(e)) for a, e in meta["sun_bands"])
+            kb = tuple((int(a), None if e is None else int(e)) for a, e in meta["sky_bands"])
+            ao = read_exr(d / "allorders.exr")
+            probe = Tables(sigmas, gs, [], None, None, None, None, np.zeros((H, W)), None, None, {},
+                           sun_bands=sb, sky_bands=kb)
+            names = _allorders_names(probe)
+            scale = np.asarray(ao.attrs.get("channel_scale"), np.float64)
+            if scale.size != len(names):
+                raise InputError(f"{d / 'allorders.exr'}: channel scales missing; rerun the precompute rule")
+            data = _stack(ao, names, H, W).astype(np.float32) * scale[:, None, None].astype(np.float32)
+            n_sun = len(sb) * len(gs) * len(sigmas)
+            extra = {"transport": "all_orders", "sun_bands": sb, "sky_bands": kb,
+                     "sun_ms": np.ascontiguousarray(data[:n_sun].reshape(len(sb), len(gs), len(sigmas), H, W)),
+                     "sky_ms": np.ascontiguousarray(data[n_sun:].reshape(4, len(kb), len(gs), len(sigmas), H, W)),
+                     "sun_ratios": np.asarray(meta["sun_ratios"], np.float64),
+                     "sky_ratios": np.asarray(meta["sky_ratios"], np.float64)}
         t_c, cos_t, foot = (geo.channel(n) for n in ("t_c", "cos_theta", "footprint"))
     except KeyError as e:
         raise InputError(f"{d}: precompute images lack channels ({e}); rerun the precompute rule") from e
     return Tables(sigmas, gs, orders, np.ascontiguousarray(s_sun), np.ascontiguousarray(s_amb),
-                  np.ascontiguousarray(T), multiple, t_c.copy(), cos_t.copy(), foot.copy(), meta)
+                  np.ascontiguousarray(T), multiple, t_c.copy(), cos_t.copy(), foot.copy(), meta, **extra)
