@@ -1,4 +1,6 @@
-"""Scattering precompute, composition and forward renderer (Dobashi 2012 §4.3, Eqs. 3–9).
+"""Scattering precompute, composition and forward renderer with Dobashi's transport (``transport: dobashi``,
+2012 §4.3, Eqs. 3–9): these tests are also the regression test of the paper's model, which stays selectable
+beside the all-orders default (tests/test_transport.py).
 
 References known independently of the code: closed forms for a constant-density box, and Mitsuba 3's own
 ``volpath`` integrator on the same volume / camera / sun / HG phase / albedo / extinction (per order via its
@@ -43,7 +45,7 @@ def vol():
 
 @pytest.fixture(scope="module")
 def tables(vol, tmp_path_factory):
-    tb = precompute(vol, CAM, SUN, sigmas=[0.0, 0.5, 1.0], gs=[0.0, 0.4, 0.8], n_m=4, spp=4096, seed=1)
+    tb = precompute(vol, CAM, SUN, sigmas=[0.0, 0.5, 1.0], gs=[0.0, 0.4, 0.8], n_m=4, spp=4096, seed=1, transport="dobashi")
     d = tmp_path_factory.mktemp("pre")
     save_tables(d, tb)
     return tb, d
@@ -101,7 +103,8 @@ def test_transmittance_matches_volpath(vol):
 
 # ------------------------------------------------------------------------------ Mitsuba volpath
 def test_single_and_order2_match_volpath(vol):
-    tb = precompute(vol, CAM, SUN, sigmas=[0.5], gs=[0.5], n_m=2, spp=4096, seed=3, with_error=False)
+    tb = precompute(vol, CAM, SUN, sigmas=[0.5], gs=[0.5], n_m=2, spp=4096, seed=3, with_error=False,
+                    transport="dobashi")
     sky = np.zeros((CAM.height, CAM.width, 3), np.float32)
     cloud = (tb.footprint > 0) & (tb.transmittance[0] < 0.95)
     single = tb.s_sun[0] * 0.9 * hg(tb.cos_theta, 0.5)
@@ -140,7 +143,7 @@ def test_g08_meets_three_percent_with_stronger_reference(vol):
     single-scattering march's 2x2 sub-rays (supersample=4) then leave a 2.6 % per-pixel box-filter error
     against volpath's order 1 (measured; 1.1 % with 4x4), so this test marches 4x4 sub-rays per pixel."""
     cam = Camera(CAM.position, CAM.look_at, fov=CAM.fov, width=16, height=12)
-    tb = precompute(vol, cam, SUN, sigmas=[0.0, 0.5], gs=[0.0, 0.4, 0.8], n_m=4, spp=32768, seed=2,
+    tb = precompute(vol, cam, SUN, sigmas=[0.0, 0.5], gs=[0.0, 0.4, 0.8], n_m=4, spp=32768, seed=2, transport="dobashi",
                     supersample=16, with_error=False)
     img = compose(tb, params(0.5, 0.8, 0.95), np.zeros((12, 16, 3), np.float32))[0, ..., 0]
     ref = render_reference(vol, cam, SUN, 0.5, 0.8, 0.95, orders=4, spp=32768, seed=7)[..., 0]
@@ -232,7 +235,7 @@ def test_render_agrees_with_compose_and_interpolation_error(tables, vol):
     for sig, g, tol in [(0.5, 0.4, 0.03), (0.75, 0.6, 0.10)]:  # grid point, then between grid points
         p = params(sig, g, 0.95, L_amb=0.05, kappa=0.2)
         c = compose(tb, p, sky)[0]
-        r = render(vol, CAM, SUN, p, sky, orders=4, spp=1024, seed=9)
+        r = render(vol, CAM, SUN, p, sky, orders=4, spp=1024, seed=9, transport="dobashi")
         cloud = tb.footprint > 0
         err = rel_l1(c, r, cloud)
         print(f"compose vs render sigma_t={sig} g={g}: relative L1 {err:.4f}")

@@ -40,8 +40,10 @@ FINE_UP_TO_ORDER = 4
 class AllOrdersSettings:
     """Settings of the all-orders transport (config ``precompute.all_orders`` / ``shots.<name>.render``)."""
 
-    sun_collisions: int = 24_000_000
-    sky_collisions: int = 12_000_000
+    sun_collisions: int = 16_000_000
+    sky_collisions: int = 6_000_000
+    sun_photons_max: int = 3_000_000      # a thin cloud (few collisions per photon) is not traced forever
+    sky_photons_max: int = 2_000_000
     fine_voxels: int = 2
     coarse_voxels: int = 4
     guide_width: tuple = (0.5, 1.0)      # optical depth, fine and coarse cache
@@ -149,14 +151,16 @@ def _images(scene: Scene, camera, sigma: float, halves, bands, channels: int) ->
 
 
 def photons_for(scene: Scene, source, sigma: float, g: float, camera, collisions: int, k_min: int,
-                seed: int, pilot: int = 32768) -> int:
-    """Photons that make about ``collisions`` collisions at (sigma, g): a short pilot run measures the rate."""
+                seed: int, pilot: int = 32768, most: int | None = None) -> int:
+    """Photons that make about ``collisions`` collisions at (sigma, g) (a short pilot run measures the rate),
+    at most ``most``."""
     from natscene.scatter.photons import trace
     t = trace(scene.med, scene.grid, source, sigma, g, camera.position, pilot, ((1, None),),
               caches=((scene.factors[1], None),), seed=seed + 104729, max_order=scene.settings.max_order,
               k_min=10 ** 9)
     per = max(t.collisions / pilot, 1e-3)
-    return int(min(max(collisions / per, 4 * pilot), 64 * collisions))
+    n = int(min(max(collisions / per, 4 * pilot), 64 * collisions))
+    return n if most is None else min(n, int(most))
 
 
 def _trace_halves(scene: Scene, source, sigma: float, g: float, camera, n_photons: int, bands, k_min: int,
@@ -188,7 +192,8 @@ def view_images(scene: Scene, camera, sigma: float, g: float, seed: int = 0) -> 
         return ViewImages(np.zeros((2, nb_sun, H, W), np.float32), sky, np.ones(nb_sun),
                           None if sky is None else np.ones(nb_sky), {})
     stats = {}
-    n_sun = photons_for(scene, scene.sun, sigma, g, camera, st.sun_collisions, 10 ** 9, seed)
+    n_sun = photons_for(scene, scene.sun, sigma, g, camera, st.sun_collisions, 10 ** 9, seed,
+                        most=st.sun_photons_max)
     sun_halves = _trace_halves(scene, scene.sun, sigma, g, camera, n_sun, st.sun_bands, 2, seed)
     sun_img = _images(scene, camera, sigma, sun_halves, st.sun_bands, 1)[:, 0]
     stats.update(sun_photons=int(sum(h.photons for h in sun_halves)),
@@ -196,7 +201,8 @@ def view_images(scene: Scene, camera, sigma: float, g: float, seed: int = 0) -> 
                  sun_truncated=float(max(h.truncated for h in sun_halves)))
     sky_img = sky_r = None
     if scene.sky is not None:
-        n_sky = photons_for(scene, scene.sky, sigma, g, camera, st.sky_collisions, 10 ** 9, seed + 7919)
+        n_sky = photons_for(scene, scene.sky, sigma, g, camera, st.sky_collisions, 10 ** 9, seed + 7919,
+                            most=st.sky_photons_max)
         sky_halves = _trace_halves(scene, scene.sky, sigma, g, camera, n_sky, st.sky_bands, 1, seed + 7919)
         sky_img = _images(scene, camera, sigma, sky_halves, st.sky_bands, 4)
         sky_r = fit_ratios(st.sky_bands, sum(h.histogram for h in sky_halves))

@@ -7,8 +7,10 @@ transport simulation", §3). With one global majorant, a cloud that fills a fift
 tentative collisions in empty space. Here the box is divided into cells of ``block`` voxels; each cell's
 majorant is the largest density of its voxels and their neighbours (the trilinear density inside a cell
 never exceeds it), and a ray crosses the cells with a 3-D DDA (Amanatides & Woo 1987): within a cell the
-exponential optical depth is consumed at the cell's rate, an empty cell costs one step. Unbiased: every
-tentative collision is accepted with mu_t / mu_bar_cell <= 1.
+exponential optical depth is consumed at the cell's rate. Empty space is skipped: in an empty cell whose
+nearest occupied cell is d cells away (chessboard distance), the ray jumps (d - 1) cell widths at once and
+the DDA restarts there. Unbiased: every tentative collision is accepted with mu_t / mu_bar_cell <= 1, and
+nothing can collide in empty cells.
 """
 from __future__ import annotations
 
@@ -33,6 +35,7 @@ class MajorantGrid:
     cell: np.ndarray        # world size of a cell (3,)
     values: np.ndarray      # float32 (cz, cy, cx)
     dr_values: object       # mi.Float, flat
+    dr_skip: object = None  # mi.Float, flat: safe jump through an empty cell (chessboard distance - 1, cells)
 
     def occupied_bounds(self) -> tuple[np.ndarray, np.ndarray]:
         """World box of the cells with a non-zero majorant (where anything can collide)."""
@@ -57,7 +60,35 @@ def majorant_grid(density: np.ndarray, bbox_min, bbox_max, block: int = 4) -> Ma
     m = pad.reshape(cz, block, cy, block, cx, block).max(axis=(1, 3, 5))
     lo = np.asarray(bbox_min, np.float64)
     voxel = (np.asarray(bbox_max, np.float64) - lo) / np.array([nx, ny, nz])
-    return MajorantGrid(block, (cx, cy, cz), lo, voxel * block, m, mi.Float(m.ravel()))
+    # empty-space skipping: every cell within chessboard distance d - 1 of an empty cell whose nearest occupied
+    # cell is d cells away is empty, so a ray in it can advance (d - 1) cell widths without meeting density
+    from scipy.ndimage import distance_transform_cdt
+    if (m > 0).any():
+        dist = distance_transform_cdt(m <= 0, metric="chessboard").astype(np.float32)
+    else:
+        dist = np.full(m.shape, float(max(m.shape)), np.float32)
+    skip = np.maximum(dist - 1.0, 0.0) * float(np.min(voxel * block))
+    return MajorantGrid(block, (cx, cy, cz), lo, voxel * block, m, mi.Float(m.ravel()), mi.Float(skip.ravel()))
+
+
+def _dda_state(p, w, t, grid: MajorantGrid):
+    """Cell index and per-axis boundary parameters of the ray p + w t at parameter t."""
+    cx, cy, cz = grid.shape
+    lo = mi.ScalarVector3f(*[float(v) for v in grid.origin])
+    cell = mi.ScalarVector3f(*[float(v) for v in grid.cell])
+    q = (p + w * (t + 1e-6 * float(np.min(grid.cell))) - lo) / cell
+    ix = mi.Int32(dr.clip(dr.floor(q.x), 0, cx - 1))
+    iy = mi.Int32(dr.clip(dr.floor(q.y), 0, cy - 1))
+    iz = mi.Int32(dr.clip(dr.floor(q.z), 0, cz - 1))
+    big = 1e30
+    okx, oky, okz = dr.abs(w.x) > 1e-12, dr.abs(w.y) > 1e-12, dr.abs(w.z) > 1e-12
+    inv_x = dr.select(okx, dr.rcp(w.x), 0.0)
+    inv_y = dr.select(oky, dr.rcp(w.y), 0.0)
+    inv_z = dr.select(okz, dr.rcp(w.z), 0.0)
+    tmx = dr.select(okx, (lo.x + (mi.Float(ix) + dr.select(w.x >= 0, 1.0, 0.0)) * cell.x - p.x) * inv_x, big)
+    tmy = dr.select(oky, (lo.y + (mi.Float(iy) + dr.select(w.y >= 0, 1.0, 0.0)) * cell.y - p.y) * inv_y, big)
+    tmz = dr.select(okz, (lo.z + (mi.Float(iz) + dr.select(w.z >= 0, 1.0, 0.0)) * cell.z - p.z) * inv_z, big)
+    return ix, iy, iz, tmx, tmy, tmz
 
 
 @dr.syntax
@@ -69,33 +100,37 @@ def free_flight(med, grid: MajorantGrid, p, w, sig_k: float, rng, active):
     """
     t0, t1 = ray_box_dr(p, w, med.bbox_min, med.bbox_max)
     cx, cy, cz = grid.shape
-    lo = mi.ScalarVector3f(*[float(v) for v in grid.origin])
     cell = mi.ScalarVector3f(*[float(v) for v in grid.cell])
-    q = (p + w * (t0 + 1e-6 * float(np.min(grid.cell))) - lo) / cell
-    ix = mi.Int32(dr.clip(dr.floor(q.x), 0, cx - 1))
-    iy = mi.Int32(dr.clip(dr.floor(q.y), 0, cy - 1))
-    iz = mi.Int32(dr.clip(dr.floor(q.z), 0, cz - 1))
+    ix, iy, iz, tmx, tmy, tmz = _dda_state(p, w, t0, grid)
     sx = dr.select(w.x >= 0, 1, -1)
     sy = dr.select(w.y >= 0, 1, -1)
     sz = dr.select(w.z >= 0, 1, -1)
-    # ray parameter of the next cell boundary per axis, and the parameter step between boundaries
+    # parameter step between boundaries per axis
     big = 1e30
-    okx, oky, okz = dr.abs(w.x) > 1e-12, dr.abs(w.y) > 1e-12, dr.abs(w.z) > 1e-12
-    inv_x = dr.select(okx, dr.rcp(w.x), 0.0)
-    inv_y = dr.select(oky, dr.rcp(w.y), 0.0)
-    inv_z = dr.select(okz, dr.rcp(w.z), 0.0)
-    tmx = dr.select(okx, (lo.x + (mi.Float(ix) + dr.select(w.x >= 0, 1.0, 0.0)) * cell.x - p.x) * inv_x, big)
-    tmy = dr.select(oky, (lo.y + (mi.Float(iy) + dr.select(w.y >= 0, 1.0, 0.0)) * cell.y - p.y) * inv_y, big)
-    tmz = dr.select(okz, (lo.z + (mi.Float(iz) + dr.select(w.z >= 0, 1.0, 0.0)) * cell.z - p.z) * inv_z, big)
-    dtx = dr.select(okx, cell.x * dr.abs(inv_x), big)
-    dty = dr.select(oky, cell.y * dr.abs(inv_y), big)
-    dtz = dr.select(okz, cell.z * dr.abs(inv_z), big)
+    dtx = dr.select(dr.abs(w.x) > 1e-12, cell.x / dr.abs(w.x), big)
+    dty = dr.select(dr.abs(w.y) > 1e-12, cell.y / dr.abs(w.y), big)
+    dtz = dr.select(dr.abs(w.z) > 1e-12, cell.z / dr.abs(w.z), big)
     t = mi.Float(t0)
     tau = -dr.log(1.0 - rng.next_float32())
     hit = mi.Bool(False)
     running = mi.Bool(active & (t1 > t0))
     while dr.hint(running, include=[rng]):
-        m = dr.gather(mi.Float, grid.dr_values, mi.UInt32((iz * cy + iy) * cx + ix), running) * sig_k
+        flat = mi.UInt32((iz * cy + iy) * cx + ix)
+        m = dr.gather(mi.Float, grid.dr_values, flat, running) * sig_k
+        jump = dr.gather(mi.Float, grid.dr_skip, flat, running)
+        # skip empty space: restart the DDA ``jump`` further on (nothing can collide on the way); a jump past
+        # the box face ends the flight (restarting the DDA exactly at the face can cycle in float32)
+        skip = running & (m <= 0) & (jump > 0)
+        leaves = skip & (t + jump >= t1)      # the jump crosses the box face: the photon escapes
+        running &= ~leaves
+        skip &= ~leaves
+        t_j = t + jump
+        jx, jy, jz, jtx, jty, jtz = _dda_state(p, w, t_j, grid)
+        t = dr.select(leaves, t1, dr.select(skip, t_j, t))
+        ix, iy, iz = dr.select(skip, jx, ix), dr.select(skip, jy, iy), dr.select(skip, jz, iz)
+        tmx, tmy, tmz = dr.select(skip, jtx, tmx), dr.select(skip, jty, tmy), dr.select(skip, jtz, tmz)
+        flat = mi.UInt32((iz * cy + iy) * cx + ix)
+        m = dr.gather(mi.Float, grid.dr_values, flat, running) * sig_k
         t_next = dr.minimum(dr.minimum(dr.minimum(tmx, tmy), tmz), t1)
         seg = dr.maximum(t_next - t, 0.0)
         inside = running & (m * seg > tau)

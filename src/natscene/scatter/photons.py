@@ -20,6 +20,11 @@ gives each band's order distribution (:func:`natscene.scatter.bands.fit_ratios`)
 
 Walks run wavefront-style (one Dr.Jit kernel per bounce, dead photons compacted away) while many photons
 are alive, then the long tail of survivors finishes in one symbolic loop.
+
+The tallies are sums of many small terms added by parallel threads in no fixed order; floating-point
+atomics would make every run's last bits differ. They are therefore accumulated in 64-bit fixed point
+(``FIXED`` units per unit of photon power: integer addition is associative), so the same seed and settings
+give the same bytes on any thread count.
 """
 from __future__ import annotations
 
@@ -35,6 +40,14 @@ import mitsuba as mi
 from natscene.scatter.bands import band_table
 from natscene.scatter.majorant import MajorantGrid, free_flight
 from natscene.scatter.phase import hg_dr, hg_sample_cos_dr
+
+
+FIXED = float(2 ** 32)      # fixed-point units per unit of (tally value / photon power)
+
+
+def _fixed(x):
+    """Fixed-point UInt64 of a non-negative Float (rounded to nearest)."""
+    return mi.UInt64(dr.round(x * FIXED))
 
 
 def _vec(x) -> "mi.ScalarVector3f":
@@ -215,8 +228,8 @@ def _tally_lanes(p, w, k, g, wts, accs, hist, slot_tabs, cam, lo, ext, res, cach
         slot = dr.gather(mi.Int32, slot_tabs[ci], kk)
         idx = mi.UInt32(dr.maximum(slot, 0)) * ncell + _cache_index(p, lo, ext, res, factor, dims)
         for c in range(len(wts)):
-            dr.scatter_reduce(dr.ReduceOp.Add, accs[ci][c], val * wts[c], idx, slot >= 0)
-    dr.scatter_reduce(dr.ReduceOp.Add, hist, tot, kk)
+            dr.scatter_reduce(dr.ReduceOp.Add, accs[ci][c], _fixed(val * wts[c]), idx, slot >= 0)
+    dr.scatter_reduce(dr.ReduceOp.Add, hist, _fixed(tot), kk)
 
 
 @dr.syntax
@@ -271,9 +284,10 @@ def trace(med, grid: MajorantGrid, source, sigma: float, g: float, camera_positi
         slot_np.append(slot)
     slot_tabs = [mi.Int32(x) for x in slot_np]
     nch = source.channels
-    accs = [[dr.zeros(mi.Float, max(1, geo[ci][2] * len(band_sets[ci]))) for _ in range(nch)]
+    accs = [[dr.zeros(mi.UInt64, max(1, geo[ci][2] * len(band_sets[ci]))) for _ in range(nch)]
             for ci in range(len(caches))]
-    hist = dr.zeros(mi.Float, max_order + 1)
+    hist = dr.zeros(mi.UInt64, max_order + 1)
+    unit = None     # photon power that one fixed-point unit of FIXED stands for (the first batch's mean)
     sig_k = float(sigma) * med.scale
     g = float(g)
     cam = mi.ScalarPoint3f(*[float(e) for e in camera_position])
@@ -288,6 +302,9 @@ def trace(med, grid: MajorantGrid, source, sigma: float, g: float, camera_positi
                        initseq=mi.UInt64(int(seed) * 7919 + 1))
         p, w, wts = source.sample(n, rng)
         wts = [x * (n / n_photons) for x in wts]     # powers of this batch as a share of the whole run
+        if unit is None:
+            unit = max(float(dr.max(sum(wts))[0]), 1e-300)
+        wts = [x / unit for x in wts]                # in units of the largest photon power: O(1) values
         alive = dr.full(mi.Bool, True, n)
         k = 0
         width = n
@@ -306,9 +323,9 @@ def trace(med, grid: MajorantGrid, source, sigma: float, g: float, camera_positi
                 idx = int(slot_np[ci][kk]) * ncell + _cache_index(p, lo, ext, res, factor, dims)
                 tot = mi.Float(0.0)
                 for c in range(nch):
-                    dr.scatter_reduce(dr.ReduceOp.Add, accs[ci][c], val * wts[c], idx, alive)
+                    dr.scatter_reduce(dr.ReduceOp.Add, accs[ci][c], _fixed(val * wts[c]), idx, alive)
                     tot += val * wts[c]
-                dr.scatter_reduce(dr.ReduceOp.Add, hist, dr.sum(tot), kk)
+                dr.scatter_reduce(dr.ReduceOp.Add, hist, dr.sum(_fixed(tot)), kk)
             dr.eval(p, w, alive, rng, *wts, *[a for acc in accs for a in acc], hist)
             n_alive = int(dr.count(alive)[0])
             collisions += n_alive
@@ -338,11 +355,12 @@ def trace(med, grid: MajorantGrid, source, sigma: float, g: float, camera_positi
         done += n
         if progress:
             progress(done, n_photons)
-    nums = [np.stack([np.asarray(a, np.float64)[:geo[ci][2] * len(band_sets[ci])]
+    scale = (unit or 0.0) / FIXED
+    nums = [np.stack([(np.asarray(a, np.float64)[:geo[ci][2] * len(band_sets[ci])] * scale)
                       .reshape(len(band_sets[ci]), geo[ci][1][2], geo[ci][1][1], geo[ci][1][0]) for a in accs[ci]])
             for ci in range(len(caches))]
-    h = np.asarray(hist, np.float64)
+    h = np.asarray(hist, np.float64) * scale
     tot_light = h.sum()
-    trunc = float(np.asarray(truncated)[0]) if dr.width(truncated) else 0.0
+    trunc = (float(np.asarray(truncated)[0]) if dr.width(truncated) else 0.0) * (unit or 0.0)
     return InscatterTally(nums, tuple(x[0] for x in geo), tuple(band_sets), h, int(done), int(collisions),
                           trunc / tot_light if tot_light > 0 else 0.0)

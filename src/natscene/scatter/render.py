@@ -38,12 +38,13 @@ def render(volume, camera, sun_dir, params: dict, sky, orders: int = 4, spp: int
            step_voxels: float = 0.5, supersample: int = 4, rho_threshold: float = 0.01,
            batch_spp: int | None = None, return_components: bool = False, transport: str = "all_orders",
            sky_settings: dict | None = None, dome=None, ground_albedo=DEFAULT_GROUND_ALBEDO,
-           sun_collisions: int | None = None, sky_collisions: int | None = None):
+           sun_collisions: int | None = None, sky_collisions: int | None = None, skylight: bool = True):
     """L_cg (H, W, 3) for one parameter set (scalars; c_in and kappa_a (3,)).
 
     ``sky``: (H, W, 3) linear L_sky at the camera's resolution (or a constant (3,) colour).
     ``return_components``: also return a dict with L_s, L_m, L_b, T, t_c, footprint (all_orders: L_m holds
-    every order >= 2 of the sun's light and L_sky_lit the skylight's).
+    every order >= 2 of the sun's light and L_sky_lit the skylight's). ``skylight=False``: the sun alone
+    lights the cloud (all_orders; e.g. to compare with a sun-only reference).
     """
     from natscene.scatter.medium import make_medium
     from natscene.scatter.single import march_view
@@ -80,17 +81,23 @@ def render(volume, camera, sun_dir, params: dict, sky, orders: int = 4, spp: int
             st.sun_collisions = int(sun_collisions)
         if sky_collisions is not None:
             st.sky_collisions = int(sky_collisions)
-        dome = dome if dome is not None else frame_dome(med.sun_dir, sky_settings)
+        if skylight:
+            dome = dome if dome is not None else frame_dome(med.sun_dir, sky_settings)
+        else:
+            dome = None
         scene = Scene(volume, Lighting(med.sun_dir, dome), st)
         vi = view_images(scene, camera, sigma, g, seed=seed)
         a_s = L_in * beta * hg(cos_t, g) * single["S_sun"][0]
         a_m = L_in * np.tensordot(band_weights(st.sun_bands, vi.sun_ratios, beta)[0], vi.sun, 1)
-        ck = band_weights(st.sky_bands, vi.sky_ratios, beta)[0]
-        sky_bands = np.tensordot(ck, np.moveaxis(vi.sky, 1, 0), 1)          # (4, H, W)
-        sin_el = max(float(med.sun_dir[1]), 0.0)
-        G = ground_radiance(np.broadcast_to(np.asarray(ground_albedo, np.float64), (3,)),
-                            L_in * c_in * sin_el, irradiance(dome))
-        L_sky_lit = np.moveaxis(sky_bands[:3], 0, -1) + sky_bands[3][..., None] * G[None, None, :].astype(np.float32)
+        L_sky_lit = np.zeros((H, W, 3), np.float32)
+        if dome is not None:
+            ck = band_weights(st.sky_bands, vi.sky_ratios, beta)[0]
+            sky_bands = np.tensordot(ck, np.moveaxis(vi.sky, 1, 0), 1)          # (4, H, W)
+            sin_el = max(float(med.sun_dir[1]), 0.0)
+            G = ground_radiance(np.broadcast_to(np.asarray(ground_albedo, np.float64), (3,)),
+                                L_in * c_in * sin_el, irradiance(dome))
+            L_sky_lit = (np.moveaxis(sky_bands[:3], 0, -1)
+                         + sky_bands[3][..., None] * G[None, None, :].astype(np.float32))
         L_s = a_s[..., None].astype(np.float32) * c_in
         L_m = a_m[..., None].astype(np.float32) * c_in
         comps.update(L_sky_lit=L_sky_lit.astype(np.float32), photons=vi.stats)

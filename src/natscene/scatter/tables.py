@@ -237,6 +237,7 @@ def _all_orders_multiple(volume, camera, sun_dir, sigmas, gs, settings, sky, see
                      "sun_elevation_sin": float(s[1] / np.linalg.norm(s))},
         "photons": counts, "truncated_light": float(truncated),
         "settings": {"sun_collisions": int(settings.sun_collisions), "sky_collisions": int(settings.sky_collisions),
+                     "sun_photons_max": int(settings.sun_photons_max), "sky_photons_max": int(settings.sky_photons_max),
                      "fine_voxels": int(settings.fine_voxels), "coarse_voxels": int(settings.coarse_voxels),
                      "guide_width": [float(x) for x in settings.guide_width], "max_order": int(settings.max_order),
                      "majorant_voxels": int(settings.majorant_voxels)},

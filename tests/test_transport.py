@@ -1,0 +1,237 @@
+"""The all-orders transport (natscene.scatter.allorders; precompute, composition and forward renderer).
+
+References known independently of the code under test:
+- Mitsuba 3's ``volpath`` with unlimited depth (max_depth -1, Russian roulette off) on the same procedural
+  cloud, camera, sun, HG phase, albedo and extinction: every scattering order, no tables;
+- a long Mitsuba run of a homogeneous slab under a normal sun (the plane-parallel reflectance and
+  transmittance) and energy conservation (reflected + transmitted flux = incident flux at albedo 1);
+- the white furnace: a non-absorbing cloud under a uniform sky of radiance L has radiance L everywhere.
+"""
+import numpy as np
+import pytest
+
+import natscene  # noqa: F401
+from natscene.geometry import Camera
+from natscene.io import InputError
+from natscene.scatter.allorders import AllOrdersSettings, Lighting, Scene, view_images
+from natscene.scatter.bands import SUN_BANDS, band_table, band_weights, check_bands, fit_ratios
+from natscene.scatter.compose import compose
+from natscene.scatter.mitsuba_scene import render_reference
+from natscene.scatter.render import render
+from natscene.scatter.skylight import Dome, uniform_dome
+from natscene.scatter.tables import load_tables, precompute, save_tables
+from natscene.volume.grid import Volume, placement
+
+SUN = np.array([0.5, 0.6, 0.3]) / np.linalg.norm([0.5, 0.6, 0.3])
+CAM = Camera((0.0, 0.25, -2.4), (0.0, 0.28, 0.0), fov=30, width=32, height=24)
+SIGMAS, GS, BETAS = (0.2, 0.5, 1.0), (0.0, 0.85), (0.9, 0.99, 0.999)
+NOSKY = {"sky_scale": [0.0, 0.0, 0.0], "ground_albedo": 0.0}
+
+
+def blob_volume(scale=80.0):
+    """A smooth procedural cloud (an ellipsoidal heap, density falling to 0 at its edge) in a unit box;
+    at sigma_t = 1 the optical depth through its middle is about 40."""
+    nx, ny, nz = 24, 16, 24
+    lo, hi = placement((nx, ny, nz))
+    z, y, x = np.meshgrid(np.linspace(-1, 1, nz), np.linspace(0, 1, ny), np.linspace(-1, 1, nx), indexing="ij")
+    d = np.clip(1 - (x ** 2 + ((y - 0.45) / 0.5) ** 2 + z ** 2) / 0.6, 0, 1).astype(np.float32)
+    return Volume(d, lo, hi, scale)
+
+
+def blocks(ours, ref, mask, size=8):
+    """Ratios of the 8x8 block sums over blocks at least half covered by cloud."""
+    H, W = ref.shape[:2]
+    out = []
+    for i in range(0, H - size + 1, size):
+        for j in range(0, W - size + 1, size):
+            if mask[i:i + size, j:j + size].mean() >= 0.5:
+                out.append(ours[i:i + size, j:j + size].sum() / ref[i:i + size, j:j + size].sum())
+    return np.array(out)
+
+
+@pytest.fixture(scope="module")
+def vol():
+    return blob_volume()
+
+
+@pytest.fixture(scope="module")
+def tables(vol, tmp_path_factory):
+    st = AllOrdersSettings(sun_collisions=6_000_000, sky_collisions=200_000)
+    tb = precompute(vol, CAM, SUN, sigmas=[0.0, *SIGMAS], gs=list(GS), seed=1, all_orders=st)
+    d = tmp_path_factory.mktemp("pre")
+    save_tables(d, tb)
+    return load_tables(d)
+
+
+@pytest.fixture(scope="module")
+def references(vol):
+    """volpath, every order, for the 18 (sigma_t, g, beta) of the issue (sun only, no sky)."""
+    out = {}
+    for s in SIGMAS:
+        for g in GS:
+            for b in BETAS:
+                img = sum(render_reference(vol, CAM, SUN, s, g, b, orders=100_000, spp=512, seed=k)
+                          for k in range(2)) / 2
+                out[s, g, b] = img[..., 0]
+    return out
+
+
+def _params(s, g, b):
+    return dict(c_in=[1.0, 1.0, 1.0], L_in=1.0, g=g, sigma_t=s, beta=b, kappa_a=[0.0] * 3, **NOSKY)
+
+
+def _check(ours, ref, foot, label):
+    m = foot & (ref > 0)
+    mean = ours[m].mean() / ref[m].mean()
+    blk = blocks(ours, ref, m)
+    print(f"{label}: mean ratio {mean:.4f}, 8x8 blocks {blk.min():.3f}..{blk.max():.3f} ({blk.size})")
+    assert abs(mean - 1) <= 0.03, f"{label}: mean over cloud pixels off by {100 * (mean - 1):.1f} %"
+    assert blk.size >= 3
+    assert np.all(np.abs(blk - 1) <= 0.10), f"{label}: an 8x8 block is off by more than 10 % ({blk})"
+
+
+def test_composed_tables_match_volpath_all_orders(tables, references):
+    foot = tables.footprint > 0
+    for (s, g, b), ref in references.items():
+        ours = compose(tables, _params(s, g, b), np.zeros((CAM.height, CAM.width, 3), np.float32))[0][..., 0]
+        _check(ours, ref, foot, f"tables sigma_t={s} g={g} beta={b}")
+
+
+def test_forward_renderer_matches_volpath_and_tables(vol, tables, references):
+    foot = tables.footprint > 0
+    sky = np.zeros(3, np.float32)
+    for s in SIGMAS:
+        for g in GS:
+            for b in BETAS:
+                ours = render(vol, CAM, SUN, _params(s, g, b), sky, seed=5, skylight=False,
+                              sun_collisions=6_000_000)[..., 0]
+                _check(ours, references[s, g, b], foot, f"render sigma_t={s} g={g} beta={b}")
+                tab = compose(tables, _params(s, g, b), np.zeros((CAM.height, CAM.width, 3), np.float32))[0][..., 0]
+                assert abs(ours[foot].mean() / tab[foot].mean() - 1) <= 0.03
+
+
+def _slab(tau=2.0, n=(48, 4, 48), width=40.0):
+    """A homogeneous slab of optical thickness ``tau`` at sigma_t = 1: ``width`` times wider than thick."""
+    nx, ny, nz = n
+    thick = 1.0
+    lo = np.array([-width / 2, 0.0, -width / 2])
+    hi = np.array([width / 2, thick, width / 2])
+    return Volume(np.ones((nz, ny, nx), np.float32), lo, hi, tau / thick)
+
+
+def _slab_camera(mu, above=True, distance=400.0, res=16):
+    """A far camera looking at the slab's centre from direction cos(zenith) = mu (azimuth +x)."""
+    s = np.sqrt(max(1 - mu * mu, 0.0))
+    d = np.array([s, mu if above else -mu, 0.0])
+    centre = np.array([0.0, 0.5, 0.0])
+    pos = centre + distance * d
+    up = (0.0, 0.0, 1.0)
+    return Camera(tuple(pos), tuple(centre), up, fov=0.3, width=res, height=res)
+
+
+@pytest.mark.parametrize("g", [0.0, 0.85])
+def test_slab_reflectance_transmittance_match_long_volpath(g):
+    """Radiance reflected (view 30 deg from the zenith) and transmitted (30 deg from the nadir) by a
+    homogeneous slab under a normal sun, against a long Mitsuba run of the same slab (2 %)."""
+    vol = _slab(n=(24, 4, 24), width=12.0)
+    sun = np.array([0.0, 1.0, 0.0])
+    beta = 0.99
+    for above in (True, False):
+        cam = _slab_camera(np.cos(np.radians(30)), above)
+        ref = sum(render_reference(vol, cam, sun, 1.0, g, beta, orders=100_000, spp=4096, seed=k)
+                  for k in range(2))[..., 0].mean() / 2
+        p = dict(c_in=[1.0] * 3, L_in=1.0, g=g, sigma_t=1.0, beta=beta, kappa_a=[0.0] * 3)
+        ours = render(vol, cam, sun, p, np.zeros(3, np.float32), seed=2, skylight=False,
+                      sun_collisions=8_000_000)[..., 0].mean()
+        print(f"slab g={g} {'reflected' if above else 'transmitted'}: ours {ours:.5f} volpath {ref:.5f}")
+        assert abs(ours / ref - 1) <= 0.02
+
+
+def test_energy_conservation_slab():
+    """beta = 1, no absorption: reflected + transmitted flux = incident flux (1 %). The fluxes integrate the
+    rendered radiance over the hemispheres (Gauss-Legendre in cos(zenith); the field is symmetric about the
+    normal under a normal sun); the unscattered beam e^{-tau} is added to the transmitted flux."""
+    vol = _slab(tau=1.0)
+    sun = np.array([0.0, 1.0, 0.0])
+    x, wq = np.polynomial.legendre.leggauss(6)
+    mus, wts = (x + 1) / 2, wq / 2
+    p = dict(c_in=[1.0] * 3, L_in=1.0, g=0.5, sigma_t=1.0, beta=1.0, kappa_a=[0.0] * 3)
+    flux = {}
+    for above in (True, False):
+        L = [render(vol, _slab_camera(mu, above, res=8), sun, p, np.zeros(3, np.float32), seed=3,
+                    skylight=False, sun_collisions=3_000_000)[..., 0].mean() for mu in mus]
+        flux[above] = 2 * np.pi * float(np.sum(wts * mus * np.asarray(L)))
+    total = flux[True] + flux[False] + np.exp(-1.0)
+    print(f"R {flux[True]:.4f} + T_diffuse {flux[False]:.4f} + T_direct {np.exp(-1.0):.4f} = {total:.4f}")
+    assert abs(total - 1) <= 0.01
+
+
+def test_white_furnace():
+    """Sun off, a uniform dome of radiance L (sky and ground), a non-absorbing cloud: radiance L everywhere."""
+    vol = blob_volume(scale=30.0)
+    L = 0.7
+    st = AllOrdersSettings(sun_collisions=20_000, sky_collisions=6_000_000)
+    scene = Scene(vol, Lighting(SUN, uniform_dome(L)), st)
+    for sigma in (0.3, 1.0):
+        vi = view_images(scene, CAM, sigma, 0.85, seed=4)
+        c = band_weights(st.sky_bands, vi.sky_ratios, 1.0)[0]
+        sky = np.tensordot(c, np.moveaxis(vi.sky, 1, 0), 1)          # (4, H, W) at beta = 1
+        from natscene.scatter.single import march_view
+        T = march_view(scene.med, CAM, [sigma])["T"][0]
+        img = sky[0] + sky[3] * L + T * L          # the dome's R channel + the unit-radiance ground basis at L
+        cloud = T < 0.9
+        print(f"white furnace sigma_t={sigma}: mean {img[cloud].mean() / L:.4f}, "
+              f"min {img[cloud].min() / L:.3f}, max {img[cloud].max() / L:.3f}")
+        assert abs(img[cloud].mean() / L - 1) <= 0.02
+        assert np.all(np.abs(blocks(img, np.full_like(img, L), cloud) - 1) <= 0.02)
+
+
+def test_band_weights_closed_form():
+    """c_b(beta) against the explicit sum over orders, and c_b(1) = 1 (the bands' light at albedo 1)."""
+    rng = np.random.default_rng(0)
+    ratios = rng.uniform(0.8, 0.99, len(SUN_BANDS))
+    for beta in (0.3, 0.9, 0.999, 1.0):
+        c = band_weights(SUN_BANDS, ratios, beta)[0]
+        for (a, e), r, cb in zip(SUN_BANDS, ratios, c):
+            k = np.arange(a, (e or 200_000) + 1)
+            w = r ** (k - a)
+            assert cb == pytest.approx(float((w * beta ** k).sum() / w.sum()), rel=1e-9)
+    assert np.allclose(band_weights(SUN_BANDS, ratios, 1.0), 1.0)
+    # a geometric histogram is fitted exactly
+    h = np.zeros(4097)
+    h[2:] = 0.93 ** np.arange(2, 4097)
+    assert np.allclose(fit_ratios(SUN_BANDS, h)[3:], 0.93, atol=1e-6)
+    with pytest.raises(ValueError):
+        check_bands([[2, 3], [5, None]], 2)
+    assert band_table(SUN_BANDS, 300)[257] == len(SUN_BANDS) - 1
+
+
+def test_sky_dome_lights_the_shadow_side(vol):
+    """The skylight brightens the cloud where the sun does not reach: with the dome on, the darkest cloud
+    pixels gain light, and a dome with zero radiance gives exactly the sun-only image."""
+    p = dict(c_in=[1.0] * 3, L_in=3.0, g=0.85, sigma_t=0.5, beta=0.99, kappa_a=[0.0] * 3)
+    sky = np.full(3, 0.3, np.float32)
+    dark = render(vol, CAM, SUN, p, sky, seed=1, skylight=False, sun_collisions=1_000_000)
+    zero = render(vol, CAM, SUN, p, sky, seed=1, dome=Dome(np.zeros((4, 8, 3)), np.zeros(3)),
+                  ground_albedo=0.0, sun_collisions=1_000_000, sky_collisions=50_000)
+    lit = render(vol, CAM, SUN, p, sky, seed=1, dome=uniform_dome(0.3), sun_collisions=1_000_000,
+                 sky_collisions=2_000_000)
+    assert np.allclose(zero, dark, rtol=1e-5, atol=1e-7)
+    cloud = render(vol, CAM, SUN, p, np.zeros(3, np.float32), seed=1, skylight=False, return_components=True,
+                   sun_collisions=100_000)[1]["T"] < 0.5
+    shade = dark[..., 0][cloud] < np.percentile(dark[..., 0][cloud], 20)
+    assert lit[..., 0][cloud][shade].mean() > 1.2 * dark[..., 0][cloud][shade].mean()
+
+
+def test_bad_transport_settings(vol):
+    with pytest.raises(InputError, match="precompute.transport"):
+        precompute(vol, CAM, SUN, sigmas=[0.5], gs=[0.5], transport="bouthors")
+    with pytest.raises(InputError, match="precompute.skylight.model"):
+        precompute(vol, CAM, SUN, sigmas=[0.5], gs=[0.5], skylight={"model": "hosek"},
+                   all_orders=AllOrdersSettings(sun_collisions=10_000, sky_collisions=10_000))
+    with pytest.raises(InputError, match="shots.<name>.render.transport"):
+        render(vol, CAM, SUN, _params(0.5, 0.5, 0.9), np.zeros(3), transport="bouthors")
+    with pytest.raises(InputError, match="precompute.n_m"):
+        precompute(vol, CAM, SUN, sigmas=[0.5], gs=[0.5], n_m=0, transport="dobashi")
+    with pytest.raises(InputError, match="precompute.spp"):
+        precompute(vol, CAM, SUN, sigmas=[0.5], gs=[0.5], spp=0, transport="dobashi")
