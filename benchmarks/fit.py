@@ -21,7 +21,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "src"))
 
-from natscene.fit.genetic import PARAMS, run_ga  # noqa: E402
+from natscene.fit.genetic import run_ga  # noqa: E402
 from natscene.fit.objective import Levels  # noqa: E402
 from natscene.fit.problem import FitProblem  # noqa: E402
 from natscene.io import read_exr, read_yaml, write_text  # noqa: E402
@@ -70,14 +70,14 @@ def main():
     prob = FitProblem(tab, sky, photo, cloud, c_in, levels=Levels(256, "srgb"))
     ranges = {"g": (0.0, float(tab.g.max()))}
     # warm-up, then the GA with every criterion but n_max disabled
-    run_ga(prob, ranges, n_max=2, epsilon_o=0, n_suc=0)
+    run_ga(prob, ranges, names=prob.names, n_max=2, epsilon_o=0, n_suc=0)
     t0 = time.perf_counter()
-    r = run_ga(prob, ranges, n_max=args.iterations, epsilon_o=0, n_suc=0, seed=1)
+    r = run_ga(prob, ranges, names=prob.names, n_max=args.iterations, epsilon_o=0, n_suc=0, seed=1)
     ga_s = time.perf_counter() - t0
     per_iter = ga_s / (r.iterations + 1)
 
     # components of one iteration: composition of 20 candidates, kappa search, full-image composition
-    vals = np.array([[r.best.values[p] for p in PARAMS]] * 20)
+    vals = np.array([[r.best.values[p] for p in prob.names]] * 20)
     reps = 10
     t0 = time.perf_counter()
     for _ in range(reps):
@@ -94,7 +94,7 @@ def main():
         numpy_search.search(lc)
     kappa_numpy_s = (time.perf_counter() - t0) / 3
     from natscene.scatter.compose import compose_cloud
-    params = {"c_in": c_in, **{p: vals[:, i] for i, p in enumerate(PARAMS)}}
+    params = {"c_in": c_in, **{p: vals[:, i] for i, p in enumerate(prob.names)}}
     t0 = time.perf_counter()
     for _ in range(3):
         compose_cloud(tab, params, sky)
@@ -112,7 +112,7 @@ def main():
         vol = load_volume(results / "volumes" / "cumulus")
         cam = Camera.from_view(view)
         sun = sun_direction(view["sun"]["azimuth"], view["sun"]["elevation"])
-        one = {"c_in": c_in, **{p: float(vals[0, i]) for i, p in enumerate(PARAMS)}, "kappa_a": r.best.kappa}
+        one = {"c_in": c_in, **{p: float(vals[0, i]) for i, p in enumerate(prob.names)}, "kappa_a": r.best.kappa}
         render(vol, cam, sun, one, sky, orders=4, spp=4)  # warm-up (kernel compilation)
         t0 = time.perf_counter()
         render(vol, cam, sun, one, sky, orders=4, spp=args.render_spp)

@@ -26,7 +26,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "src"))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
-from natscene.fit.genetic import PARAMS, run_ga  # noqa: E402
+from natscene.fit.genetic import run_ga  # noqa: E402
 from natscene.fit.gradient import gradient_descent  # noqa: E402
 from natscene.fit.problem import FitProblem  # noqa: E402
 from natscene.io import write_text  # noqa: E402
@@ -57,12 +57,12 @@ def main():
         prob = FitProblem(tab, sky, photo, cloud, c_in)
         ga, gd, t0 = [], [], time.perf_counter()
         for s in range(args.seeds):
-            ga.append(run_ga(prob, ranges, seed=s, epsilon_o=0, n_suc=0, n_max=100).best.objective)
+            ga.append(run_ga(prob, ranges, names=prob.names, seed=s, epsilon_o=0, n_suc=0, n_max=100).best.objective)
         t_ga = time.perf_counter() - t0
         t0 = time.perf_counter()
         gd_iters = []
         for s in range(args.seeds):
-            r = gradient_descent(prob, ranges, seed=s, max_iter=100)
+            r = gradient_descent(prob, ranges, names=prob.names, seed=s, max_iter=100)
             gd.append(r.best.objective)
             gd_iters.append(r.iterations)
         t_gd = time.perf_counter() - t0
@@ -93,19 +93,19 @@ def main():
         foot = tab.footprint > 0.5
         prob = FitProblem(tab, sky, target, foot, c_in)
         t0 = time.perf_counter()
-        runs = [run_ga(prob, ranges, seed=s, epsilon_o=0, n_suc=0, n_max=100) for s in range(args.recovery_seeds)]
+        runs = [run_ga(prob, ranges, names=prob.names, seed=s, epsilon_o=0, n_suc=0, n_max=100) for s in range(args.recovery_seeds)]
         t_fit = (time.perf_counter() - t0) / len(runs)
         per_seed = [float(x.best.objective) for x in runs]
         r = sorted(runs, key=lambda x: x.best.objective)[len(runs) // 2]   # the median run, not the best
-        vals = np.array([[r.best.values[p] for p in PARAMS]])
+        vals = np.array([[r.best.values[p] for p in prob.names]])
         img = prob.render(vals, r.best.kappa[None])[0]
         diff = np.abs(img[foot] - target[foot])
-        true_vals = np.array([[true[p] for p in PARAMS]])
+        true_vals = np.array([[true[p] for p in prob.names]])
         o_true = float(prob.search.evaluate(prob.cloud(true_vals), kappa[None])[0])
         out["recovery"] = {
             "true": {**true, "kappa_a": kappa.tolist()},
             "fitted": {**r.best.values, "kappa_a": r.best.kappa.tolist()},
-            "abs_error": {p: abs(r.best.values[p] - true[p]) for p in PARAMS},
+            "abs_error": {p: abs(r.best.values[p] - true[p]) for p in prob.names},
             "O_fitted": r.best.objective,
             "O_fitted_per_seed": per_seed, "O_fitted_stats": stats(per_seed),
             "O_true_parameters_through_tables": o_true,

@@ -57,6 +57,8 @@ def fit_keyframe(tables, photo, photo_cloud, sky, c_in, settings: dict, seed: in
             raise InputError("the precompute's meta.yaml has no skylight.view_mean_rgb; rerun the precompute rule")
         fixed = {"sky_scale": calibration(np.asarray(sky, np.float64).reshape(-1, 3).mean(0), view_mean),
                  "ground_albedo": np.broadcast_to(np.asarray(settings.get("ground_albedo", 0.2), np.float64), (3,))}
+        if not settings.get("skylight", True):        # the sun alone lights the cloud
+            fixed = {"sky_scale": np.zeros(3), "ground_albedo": np.zeros(3)}
         log(f"all-orders transport: the sky dome calibrated to the photo's L_sky by "
             f"{np.round(fixed['sky_scale'], 4).tolist()}, ground albedo {fixed['ground_albedo'].tolist()}")
     problem = FitProblem(tables, sky, photo, photo_cloud, c_in, levels=levels,

@@ -1,0 +1,157 @@
+"""Benchmark of the all-orders transport against Dobashi's (issue 16), one run, both models side by side.
+
+For the main job's cloud and view (config/config.yaml: volume `cumulus`, view `kite`, its precompute
+settings), per transport model (`all_orders`, `dobashi`):
+
+- ``precompute_s``: the whole precompute (tables for every (sigma_t, g) node);
+- ``noise``: the per-pixel relative standard error of the composed multiple-scattering term (median, p95
+  over the cloud pixels and every node; from the precompute's own estimate);
+- ``ga_iteration_ms``: one GA iteration of the fit (20 candidates composed at the 320x240 footprint and the
+  kappa_a line search) on the kite photo;
+- ``frame_s``: one forward-rendered frame of the same view at the tables' resolution (the direct render a
+  fit would need per candidate without tables) and the fit speed-up 20 x frame / iteration (Dobashi
+  reports about 6,000x);
+- agreement with Mitsuba 3 ``volpath`` of every order (max_depth -1, no Russian roulette) on the tests'
+  procedural cloud: keys ``volpath_mean_ratio`` and ``volpath_block_err_max`` (largest 8x8 block error)
+  per (sigma_t, g, beta), for the composed tables.
+
+Writes results/benchmarks/transport.json. Takes about half an hour on 2 cores (the all-orders precompute
+dominates).   .venv/bin/python benchmarks/transport.py
+"""
+from __future__ import annotations
+
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from _common import ROOT, write_result
+
+import natscene  # noqa: F401
+from natscene.config import load_yaml_config, resolve_path, validate_config
+from natscene.geometry import Camera, sun_direction
+
+TRANSPORTS = ("all_orders", "dobashi")
+
+
+def main_job():
+    cfg = load_yaml_config(ROOT / "config" / "config.yaml")
+    validate_config(cfg, ROOT / "workflow" / "schemas" / "config.schema.yaml", source="config/config.yaml")
+    return cfg
+
+
+def photo_products(cfg, w, h):
+    """The kite photo's L_sky, photo, cloud mask and c_in at the view's resolution (the sky stage in-process)."""
+    from natscene.io import read_photo
+    from natscene.sky.extract import extract_sky
+    from natscene.sky.resample import area_resample, resample_labels
+    photo = read_photo(resolve_path(cfg["photos"]["kite"]["path"], ROOT))
+    res = extract_sky(photo)
+    return {"photo": area_resample(res.photo, w, h), "sky": area_resample(res.sky, w, h),
+            "cloud": resample_labels(res.labels.astype(np.float32), w, h) == 1, "c_in": np.asarray(res.sun.c_in)}, res
+
+
+def volume(cfg):
+    from natscene.volume.build import build_volume
+    vol, _ = build_volume(cfg["volumes"]["cumulus"], "cumulus")
+    return vol
+
+
+def noise_figures(meta, transport):
+    if transport == "all_orders":
+        e = meta["pixel_relative_standard_error"]
+        return {"sun_multiple_beta0.99": e["sun.beta0.99"], "sky_beta0.99": e["sky.beta0.99"],
+                "sun_multiple_beta0.9": e["sun.beta0.9"], "sun_multiple_beta0.999": e["sun.beta0.999"]}
+    return {"sum_of_orders": meta["pixel_relative_standard_error"]["sum"],
+            **{k: v for k, v in meta["pixel_relative_standard_error"].items() if k != "sum"}}
+
+
+def volpath_agreement(transport):
+    """Composed tables vs Mitsuba volpath (every order) on the tests' procedural cloud, 32x24."""
+    sys.path.insert(0, str(ROOT / "tests"))
+    from test_transport import BETAS, CAM, GS, NOSKY, SIGMAS, SUN, blob_volume, blocks
+    from natscene.scatter.allorders import AllOrdersSettings
+    from natscene.scatter.compose import compose
+    from natscene.scatter.mitsuba_scene import render_reference
+    from natscene.scatter.tables import precompute
+    vol = blob_volume()
+    tb = precompute(vol, CAM, SUN, sigmas=[0.0, *SIGMAS], gs=list(GS), seed=1, transport=transport, n_m=4,
+                    spp=4096, all_orders=AllOrdersSettings(sun_collisions=6_000_000, sky_collisions=200_000))
+    foot = tb.footprint > 0
+    out = {}
+    for s in SIGMAS:
+        for g in GS:
+            for b in BETAS:
+                ref = sum(render_reference(vol, CAM, SUN, s, g, b, orders=100_000, spp=512, seed=k)
+                          for k in range(2))[..., 0] / 2
+                p = dict(c_in=[1.0] * 3, L_in=1.0, g=g, sigma_t=s, beta=b, L_amb=0.0, kappa_a=[0.0] * 3, **NOSKY)
+                ours = compose(tb, p, np.zeros((CAM.height, CAM.width, 3), np.float32))[0][..., 0]
+                m = foot & (ref > 0)
+                blk = blocks(ours, ref, m)
+                out[f"s{s}_g{g}_b{b}"] = {"volpath_mean_ratio": round(float(ours[m].mean() / ref[m].mean()), 4),
+                                          "volpath_block_err_max": round(float(np.abs(blk - 1).max()), 4)}
+    return out
+
+
+def main():
+    from natscene.fit.keyframe import fit_keyframe
+    from natscene.scatter.allorders import AllOrdersSettings
+    from natscene.scatter.render import render
+    from natscene.scatter.tables import precompute
+    from natscene.variant import select_variant
+
+    select_variant(threads=2)
+    cfg = main_job()
+    view = cfg["views"]["kite"]
+    camera = Camera.from_view(view)
+    sun = sun_direction(view["sun"]["azimuth"], view["sun"]["elevation"])
+    vol = volume(cfg)
+    pre = cfg["precompute"]
+    products, _ = photo_products(cfg, camera.width, camera.height)
+    result = {"volume": "cumulus", "view": "kite", "resolution": [camera.width, camera.height],
+              "grid": {"sigma_t": pre["sigma_t"], "g": pre["g"]}}
+    for transport in TRANSPORTS:
+        ao = pre.get("all_orders") or {}
+        st = AllOrdersSettings(**{k: (tuple(v) if isinstance(v, list) else v) for k, v in ao.items()},
+                               step_voxels=pre["step_voxels"], supersample=pre["supersample"])
+        t0 = time.perf_counter()
+        tables = precompute(vol, camera, sun, sigmas=pre["sigma_t"], gs=pre["g"], n_m=pre["n_m"], spp=pre["spp"],
+                            seed=pre["seed"], step_voxels=pre["step_voxels"], supersample=pre["supersample"],
+                            transport=transport, all_orders=st, skylight=pre.get("skylight"), log=print)
+        t_pre = time.perf_counter() - t0
+        fit_settings = dict(cfg["fit"], n_max=30, epsilon_O=0.0, n_suc=0)
+        fit_keyframe(tables, products["photo"], products["cloud"], products["sky"], products["c_in"],
+                     dict(fit_settings, n_max=1), seed=0)     # warm-up (kernel compilation)
+        t0 = time.perf_counter()
+        fit = fit_keyframe(tables, products["photo"], products["cloud"], products["sky"], products["c_in"],
+                           fit_settings, seed=0)
+        t_fit = time.perf_counter() - t0
+        per_iter = t_fit / (fit["result"].iterations + 1)
+        chosen = fit["params"]["chosen"]
+        p = {k: chosen[k] for k in ("L_in", "g", "sigma_t", "beta", "L_amb", "c_in", "kappa_a")}
+        p.update({k: chosen[k] for k in ("sky_scale", "ground_albedo") if k in chosen})
+        kw = dict(transport=transport)
+        if transport == "dobashi":
+            kw.update(orders=pre["n_m"], spp=16)
+        else:
+            kw.update(sun_collisions=st.sun_collisions, sky_collisions=st.sky_collisions)
+        render(vol, camera, sun, p, products["sky"], **kw)                # warm-up
+        t0 = time.perf_counter()
+        render(vol, camera, sun, p, products["sky"], **kw)
+        t_frame = time.perf_counter() - t0
+        result[transport] = {
+            "precompute_s": round(t_pre, 1), "noise": noise_figures(tables.meta, transport),
+            "ga_iteration_ms": round(1000 * per_iter, 2), "frame_s": round(t_frame, 2),
+            "fit_speedup_over_direct_rendering": round(20 * t_frame / per_iter, 1),
+            "fit_O": round(fit["result"].best.objective, 4),
+            "fitted": {k: chosen[k] for k in ("L_in", "g", "sigma_t", "beta", "L_amb")},
+            "table_megabytes": round(tables.nbytes() / 1e6, 1),
+            "volpath": volpath_agreement(transport),
+        }
+        print(result[transport])
+    write_result("transport", result)
+
+
+if __name__ == "__main__":
+    main()
