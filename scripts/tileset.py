@@ -1,7 +1,8 @@
 """Rule `tileset`: GA-optimised ω-tile set from an example texture (Dong 2007 Ch. 5)."""
 import numpy as np
 
-from natscene.io import InputError, read_photo, write_exr, write_png, write_yaml
+from natscene.errors import InputError
+from natscene.io import read_photo, write_exr, write_png, write_yaml
 from natscene.runner import run
 from natscene.tiles.construct import construct, diagram, to_atlas
 from natscene.tiles.embed import embed, grabcut_object

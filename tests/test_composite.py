@@ -371,7 +371,8 @@ def test_composite_frame_follows_the_shot_frame(tmp_path):
     camera-to-cloud distance, the shot's resolution and sky; a malformed state or a plate of the wrong size
     names the file."""
     from natscene.composite.inputs import build_set
-    from natscene.io import InputError, write_exr, write_yaml
+    from natscene.errors import InputError
+    from natscene.io import write_exr, write_yaml
     shot = _write_shot(tmp_path)
     spec = build_set(_shot_entry(), 3, str(tmp_path), str(tmp_path), shot)
     np.testing.assert_allclose(spec.camera.position, [0.2, 0.3, 0.0])
@@ -394,7 +395,8 @@ def test_composite_frame_follows_the_shot_frame(tmp_path):
 
 def test_pattern_without_alpha_names_the_file(tmp_path):
     from natscene.composite.inputs import build_set
-    from natscene.io import InputError, write_exr
+    from natscene.errors import InputError
+    from natscene.io import write_exr
     shot = _write_shot(tmp_path)
     write_exr(tmp_path / "patterns/p/color.exr", np.full((8, 8, 3), 0.5, np.float32), ["R", "G", "B"])
     entry = {**_shot_entry(), "meadow": {"area": {"near": 0.5, "far": 3.0, "half_angle": 30.0},

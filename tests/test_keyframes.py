@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 import yaml
 
+from natscene.errors import InputError
 from natscene.geometry import Camera, sun_direction
-from natscene.io import InputError
 from natscene.keyframes.animation import filmstrip, strip_indices, write_animation
 from natscene.keyframes.interpolate import (catmull_rom, direction_to_sun_angles, ease, lerp, segment_t,
                                             slerp)

@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
+from natscene.errors import InputError
 from natscene.geometry import Camera
-from natscene.io import InputError
 from natscene.mie.march import render_mie
 from natscene.mie.phase import (compute_mie_table, fogbow_peak_deg, glory_ring_deg, henyey_greenstein, hg_table,
                                 read_table, sphere_integral, write_table)

@@ -7,11 +7,12 @@ import numpy as np
 import pytest
 import skimage.data
 
-from natscene.config import ConfigError, load_yaml_config, validate_config
+from natscene.config import load_yaml_config, validate_config
+from natscene.errors import ConfigError
+from natscene.tiles.blend import poisson_blend
 from natscene.tiles.construct import construct, from_atlas, intermediate_tiles, to_atlas
 from natscene.tiles.embed import embed, grabcut_object
 from natscene.tiles.genetic import GAParams, MatchCost, evaluation, quarter_layout, run_ga
-from natscene.tiles.blend import poisson_blend
 from natscene.tiles.graphcut import (_tables, array_pair_values, axis_weights, build_tile, constraint_masks,
                                      intermediate_offsets, junction_extensions, merge, render,
                                      seam_energy, tile_energy)

@@ -11,9 +11,7 @@ from pathlib import Path
 
 import yaml
 
-
-class ConfigError(ValueError):
-    """The config is invalid; the message names the key path."""
+from natscene.errors import ConfigError
 
 
 def _key_path(path) -> str:

@@ -237,7 +237,8 @@ def write_table(path, table: PhaseTable, stage: str = "mie_table") -> None:
 
 def read_table(path) -> PhaseTable:
     """Read a table written by :func:`write_table` (renormalised over the sphere in float64)."""
-    from natscene.io import InputError, read_exr
+    from natscene.errors import InputError
+    from natscene.io import read_exr
     img = read_exr(path)
     for c in ("theta", "R", "G", "B"):
         if c not in img.channels:

@@ -89,7 +89,7 @@ def render_reference_mie(volume, camera, sun_dir, solution: Solution, table: Pha
     params = params or {}
     sd = np.asarray(sun_dir, float) / np.linalg.norm(sun_dir)
     if float(np.dot(sd, solution.points.sun_dir)) < 1 - 1e-6:
-        from natscene.io import InputError
+        from natscene.errors import InputError
         raise InputError("mie.reference: the solution was solved for another sun direction; rerun point_scatter")
     c_in = np.broadcast_to(np.asarray(params.get("c_in", (1.0, 1.0, 1.0)), np.float64), (3,))
     L_in = float(params.get("L_in", 1.0))

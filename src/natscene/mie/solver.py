@@ -38,7 +38,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from natscene.color import LUMA_709
-from natscene.io import InputError
+from natscene.errors import InputError
 from natscene.mie.phase import PhaseTable
 from natscene.mie.points import PointCloud
 

@@ -29,7 +29,7 @@ import colour
 import numpy as np
 
 from natscene.color import xyz_to_linear_srgb
-from natscene.io import InputError
+from natscene.errors import InputError
 from natscene.patterns.pigments import WAVELENGTHS, Pigment
 
 

@@ -22,7 +22,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from natscene.io import InputError
+from natscene.errors import InputError
 
 WAVELENGTHS = np.arange(400.0, 771.0, 5.0)
 

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from natscene.io import InputError, read_mask
+from natscene.errors import InputError
+from natscene.io import read_mask
 from natscene.patterns.reaction_diffusion import RDParams, schnakenberg_constants
 from natscene.patterns.venation import parametric_petal, radial_venation_spec, venation_from_nodes
 

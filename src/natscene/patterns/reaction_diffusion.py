@@ -56,7 +56,7 @@ from dataclasses import dataclass, field, asdict
 import numpy as np
 import scipy.sparse as sp
 
-from natscene.io import InputError
+from natscene.errors import InputError
 from natscene.patterns.venation import Venation
 
 P_MM, P_MV, P_VV = 1.0, 2.0, 10.0

@@ -30,7 +30,7 @@ import numpy as np
 from scipy import ndimage
 
 from natscene.color import linear_srgb_to_lab, linear_to_srgb, srgb_to_linear, srgb_to_yiq, yiq_to_srgb
-from natscene.io import InputError
+from natscene.errors import InputError
 
 
 def flower_mask(photo_linear: np.ndarray, s_min: float = 0.35, v_min: float = 0.08) -> np.ndarray:

@@ -80,7 +80,7 @@ class Medium:
 
 
 def _check_volume(volume) -> np.ndarray:
-    from natscene.io import InputError
+    from natscene.errors import InputError
     d = np.asarray(volume.density, np.float32)
     if d.ndim != 3 or d.size == 0:
         raise InputError(f"volume density must be a 3-D [nz, ny, nx] grid, got shape {d.shape}")

@@ -16,7 +16,7 @@ from dataclasses import asdict, dataclass, field
 import cv2
 import numpy as np
 
-from natscene.io import InputError
+from natscene.errors import InputError
 from natscene.sky.laplace import solve_laplace
 from natscene.sky.plausibility import PlausibilityLimits, findings, measure, negative_values
 from natscene.sky.segmentation import AUTO, CLOUD, NEITHER, SKY, check_colour_photo, classify, soft_alpha
