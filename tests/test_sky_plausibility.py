@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from natscene import io
+from natscene.config import settings_from_section
 from natscene.errors import InputError
 from natscene.sky import SkySettings, extract_sky
 from natscene.sky.plausibility import PlausibilityLimits, findings, measure
@@ -126,7 +127,7 @@ def test_limits_are_configurable(kite):
     m = measure(kite, _extract(kite).labels, _extract(kite).sun.c_in)
     assert findings(m, PlausibilityLimits()) == []
     assert findings(m, PlausibilityLimits(min_sky_fraction=0.9))  # the kite photo has 84 % sky
-    assert PlausibilityLimits.from_config({"sun_cct_k": [1000, 3000]}).sun_cct_k == (1000, 3000)
+    assert settings_from_section(PlausibilityLimits, {"sun_cct_k": [1000, 3000]}, "sky.checks").sun_cct_k == (1000, 3000)
 
 
 # --------------------------------------------------------------------------------------- damaged files

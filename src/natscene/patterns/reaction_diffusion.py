@@ -111,17 +111,6 @@ class RDParams:
         return np.array([[self.sa * (2 * a * b - self.K_A), self.sa * a * a],
                          [-self.sb * self.K_B * 2 * a * b, -self.sb * self.K_B * a * a]])
 
-    @classmethod
-    def from_dict(cls, d: dict) -> "RDParams":
-        d = dict(d)
-        if "root_supply" in d:
-            d["root_supply"] = tuple(d["root_supply"])
-        names = set(cls.__dataclass_fields__)
-        bad = set(d) - names
-        if bad:
-            raise InputError(f"unknown reaction-diffusion parameter(s) {sorted(bad)}; allowed: {sorted(names)}")
-        return cls(**d)
-
     def to_dict(self) -> dict:
         d = asdict(self)
         d["root_supply"] = list(self.root_supply)

@@ -52,12 +52,7 @@ class GAParams:
     metric: str = "color"
     mu: float = 10.0
 
-    @classmethod
-    def from_dict(cls, d: dict | None) -> "GAParams":
-        d = dict(d or {})
-        if "lambda" in d:
-            d["lam"] = d.pop("lambda")
-        return cls(**d)
+    CONFIG_NAMES = {"lambda": "lam"}  # config name -> field (``lambda`` is a Python keyword)
 
 
 def quarter_layout(s: int):
