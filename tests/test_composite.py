@@ -382,7 +382,7 @@ def test_composite_frame_follows_the_shot_frame(tmp_path):
     np.testing.assert_allclose(rgb, 4.5 * np.array([1.45, 0.92, 0.48]), rtol=3e-2)
     np.testing.assert_allclose(spec.atmosphere.kappa, [0.05, 0.12, 0.25])
     assert spec.atmosphere.reference_distance == pytest.approx(np.linalg.norm([0.2, 0.3 - 300.0, -1000.0]))
-    from natscene.keyframes.sky import preetham_rgb
+    from natscene.sky.daylight import preetham_rgb
     d = np.array([[0.0, 0.3, 1.0]]) / np.linalg.norm([0.0, 0.3, 1.0])
     np.testing.assert_allclose(spec.sky(d), preetham_rgb(d, sun_direction(105.0, 3.0)), rtol=1e-6)
     write_yaml(tmp_path / "shots/s/params/0004.yaml", {"sun": {"azimuth": 105.0}})

@@ -20,7 +20,7 @@ from natscene.keyframes.interpolate import (catmull_rom, direction_to_sun_angles
                                             slerp)
 from natscene.keyframes.shot import (bracket, camera_neighbours, frame_state, keyframe_params,
                                      resolve_keyframe, validate_shot)
-from natscene.keyframes.sky import preetham_Yxy, preetham_rgb, zenith_Yxy
+from natscene.sky.daylight import preetham_Yxy, preetham_rgb, zenith_Yxy
 
 ROOT = Path(__file__).resolve().parents[1]
 
