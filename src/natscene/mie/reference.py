@@ -29,7 +29,7 @@ import mitsuba as mi
 from natscene.mie.march import lattice_fields
 from natscene.mie.phase import PhaseTable
 from natscene.mie.solver import Solution
-from natscene.scatter.medium import _mi
+from natscene.scatter.medium import active_mitsuba
 from natscene.scatter.mitsuba_scene import scene_dict
 
 
@@ -63,7 +63,7 @@ def reference_scene(volume, camera, sun_dir, solution: Solution, table: PhaseTab
                     irradiance: float = 1.0, albedo: float = 1.0, max_depth: int = 64, spp: int = 256,
                     ratio: np.ndarray | None = None, n_cos: int = 100_001):
     """The loaded Mitsuba scene of one channel (``ratio``: a precomputed :func:`ratio_grid`)."""
-    _mi()
+    active_mitsuba()
     p = solution.points
     sigma_t = p.sigma_e / float(volume.extinction_scale)
     d = scene_dict(volume, camera, sun_dir, sigma_t, 0.0, albedo, (irradiance,) * 3, max_depth, spp)

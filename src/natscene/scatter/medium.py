@@ -21,11 +21,14 @@ import mitsuba as mi
 from natscene.variant import select_variant
 
 
-def _mi():
+def active_mitsuba():
     """The mitsuba module with a variant active (selects one on first use)."""
     if mi.variant() is None:
         select_variant()
     return mi
+
+
+_mi = active_mitsuba  # the scatter package's own short name
 
 
 @dataclass
