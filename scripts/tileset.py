@@ -7,7 +7,7 @@ from natscene.io import read_photo, write_exr, write_png, write_yaml
 from natscene.runner import run
 from natscene.tiles.construct import construct, diagram, to_atlas
 from natscene.tiles.embed import embed, grabcut_object
-from natscene.tiles.genetic import GAParams, max_tile_size, min_example_side, min_patch_positions
+from natscene.tiles.tile_ga import GAParams, max_tile_size, min_example_side, min_patch_positions
 from natscene.tiles.omega import tile_set
 
 

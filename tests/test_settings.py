@@ -12,7 +12,7 @@ from natscene.leaves.season import SeasonParams
 from natscene.scatter.allorders import AllOrdersSettings
 from natscene.sky.extract import SkySettings
 from natscene.sky.plausibility import PlausibilityLimits
-from natscene.tiles.genetic import GAParams
+from natscene.tiles.tile_ga import GAParams
 
 SCHEMAS = Path(__file__).resolve().parents[1] / "workflow" / "schemas"
 
