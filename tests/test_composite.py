@@ -440,6 +440,7 @@ def test_cloud_above_the_horizon_for_the_main_job_camera():
     from natscene.config import load_yaml_config, validate_config
     from natscene.geometry import ray_box
     from natscene.keyframes.shot import resolve_keyframe
+    from natscene.volume.build import DEFAULT_ALTITUDE_M, DEFAULT_SIZE_M
     from natscene.volume.grid import placement
     from pathlib import Path
     root = Path(__file__).resolve().parents[1]
@@ -448,7 +449,9 @@ def test_cloud_above_the_horizon_for_the_main_job_camera():
     entry = next(e for e in cfg["composite"].values() if e.get("shot"))
     shot = cfg["shots"][entry["shot"]]
     vol = cfg["volumes"][shot["volume"]]
-    lo, hi = placement(vol["resolution"], vol["size"])
+    lo, hi = placement(vol["resolution"], vol.get("size") or DEFAULT_SIZE_M[vol["kind"]])  # as build_volume places it
+    alt = DEFAULT_ALTITUDE_M if vol.get("altitude") is None else float(vol["altitude"])
+    lo, hi = lo + np.array([0.0, alt, 0.0]), hi + np.array([0.0, alt, 0.0])
     W, H = shot["resolution"][0] // 4, shot["resolution"][1] // 4
     origin = np.asarray(entry["origin"], np.float64)
     for i, kf in enumerate(shot["keyframes"]):
