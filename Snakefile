@@ -7,7 +7,8 @@ from pathlib import Path
 ROOT = Path(workflow.basedir).resolve()
 sys.path.insert(0, str(ROOT / "src"))  # the library, also when the package is not pip-installed
 
-from natscene.config import ConfigError, load_yaml_config, resolve_path, validate_config
+from natscene.config import load_yaml_config, resolve_path, validate_config
+from natscene.errors import ConfigError
 from natscene.config_checks import check_config
 from natscene.fingerprint import script_fingerprint as _script_fingerprint
 from natscene.resources import mem_mb as _mem_mb

@@ -17,7 +17,7 @@ import numpy as np
 
 from natscene.geometry import sun_direction
 from natscene.io import write_text
-from natscene.mie.demo import demo_camera
+from natscene.mie.cameras import effect_camera
 from natscene.mie.march import render_mie
 from natscene.mie.phase import compute_mie_table, hg_table
 from natscene.mie.points import generate_points
@@ -58,11 +58,11 @@ def main():
     naive, n_sub = all_pairs_pass_seconds(pts, table)
     out["all_pairs_estimate_seconds"] = naive * (len(pts.density) / n_sub) ** 2 * 6
     out["solve_speedup_vs_all_pairs"] = out["all_pairs_estimate_seconds"] / out["solve_seconds"]
-    cam = demo_camera("fogbow", vol, sun, resolution=(640, 480))
-    cam2 = demo_camera("silver_lining", vol, sun, resolution=(640, 480))
+    cam = effect_camera("fogbow", vol, sun, resolution=(640, 480))
+    cam2 = effect_camera("silver_lining", vol, sun, resolution=(640, 480))
     params = {"L_in": 6.0, "L_amb": 0.25, "sky_color": [0.25, 0.38, 0.62]}
     # JIT warm-up on a copy of the solution (its per-sun cache stays empty for the timed first frame)
-    render_mie(vol, demo_camera("glory", vol, sun, resolution=(16, 12)), sun, replace(sol, cache={}), table, params)
+    render_mie(vol, effect_camera("glory", vol, sun, resolution=(16, 12)), sun, replace(sol, cache={}), table, params)
     # first frame of this sun: builds the per-sun fields (brickmap, sun optical depth, cone LUT) and caches
     # them on the solution; later frames (any view or light colour, same sun) reuse them
     t = time.perf_counter()

@@ -1,6 +1,7 @@
 """Rule leaf_season: seasonal maple leaf colour (Dong 2007 Ch. 4, Eqs. 4.3-4.8) with PROSPECT-D optics."""
 import numpy as np
 
+from natscene.config import settings_from_section
 from natscene.io import write_exr, write_png, write_text
 from natscene.leaves.season import SeasonParams, apply_case, normal_climate, parse_date, simulate_season, stage_days
 from natscene.leaves.texture import base_map, leaf_texture, maple_mask, maple_venation
@@ -10,7 +11,7 @@ from natscene.runner import run
 def main(snakemake, log):
     spec, case = snakemake.params.spec, snakemake.params.case
     normal = normal_climate(**spec["climate"])
-    s = simulate_season(apply_case(normal, case), normal, SeasonParams(**spec["season"]))
+    s = simulate_season(apply_case(normal, case), normal, settings_from_section(SeasonParams, spec["season"], "leaves.season"))
     log.info(f"climate {snakemake.wildcards.climate} ({case.get('kind')}): stages {stage_days(s)}")
     size = int(spec["size"])
     mask = maple_mask(size)

@@ -8,9 +8,9 @@ import numpy as np
 
 from natscene.geometry import sun_direction
 from natscene.io import auto_exposure, to_srgb8, write_exr, write_png, write_yaml
-from natscene.mie.demo import (angular_profile, deck_camera, demo_camera, rim_peak, ring_contrast,
-                               scattering_angle_at_centre, silver_lining_camera)
+from natscene.mie.cameras import deck_camera, effect_camera, scattering_angle_at_centre, silver_lining_camera
 from natscene.mie.march import render_mie
+from natscene.mie.measure import angular_profile, rim_peak, ring_contrast
 from natscene.mie.phase import fogbow_peak_deg, glory_ring_deg, hg_table, read_table
 from natscene.mie.solver import load_solution
 from natscene.runner import run
@@ -36,7 +36,7 @@ def main(snakemake, log):
     elif shot["cloud"] == "deck":
         cam = deck_camera(name, vol, sd, shot["distance"], shot["fov"], res, shot["angle"])
     else:
-        cam = demo_camera(name, vol, sd, shot["distance"], shot["fov"], res, fogbow_angle=shot["angle"])
+        cam = effect_camera(name, vol, sd, shot["distance"], shot["fov"], res, fogbow_angle=shot["angle"])
     log.info(f"{name}: {shot['cloud']} cloud, droplets {shot['droplets'] or 'default'}, scattering angle at "
              f"the view centre {scattering_angle_at_centre(cam, sd):.1f} deg, {cam.width}x{cam.height}")
     sky = np.broadcast_to(np.asarray(r["sky_color"], np.float32), (cam.height, cam.width, 3))

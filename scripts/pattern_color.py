@@ -14,7 +14,7 @@ def main(snakemake, log):
     mask = maps[0].channel("A")
     pig = [pigment(p) for p in spec["pigments"]]
     if len(pig) != conc.shape[-1]:
-        from natscene.io import InputError
+        from natscene.errors import InputError
         raise InputError(f"config key 'patterns.{snakemake.wildcards.pattern}.pigments': give {conc.shape[-1]} "
                          f"pigments (one per map; use 'blank' for a one-pigment flower)")
     table = precompute(pig, spec.get("illuminant", "D65"))

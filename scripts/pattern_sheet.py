@@ -1,18 +1,16 @@
 """Rule pattern_sheet: one preview sheet of all configured pigment patterns (Dong 2007 Fig. 3.3 layout): a row
 per pattern with its name, pigment map 0 and map 1 (dark = more pigment, Dong's convention) and the colour."""
-import cv2
 import numpy as np
 
 from natscene.color import linear_to_srgb
 from natscene.io import read_exr, write_png
+from natscene.preview import label
 from natscene.runner import run
 
 
-def _label(text: str, h: int, w: int = 150) -> np.ndarray:
-    img = np.zeros((h, w, 3), np.uint8)
-    cv2.putText(img, text.replace("_", " "), (6, h // 2 + 5), cv2.FONT_HERSHEY_SIMPLEX, 0.5, (255, 255, 255), 1,
-                cv2.LINE_AA)
-    return img.astype(np.float32) / 255.0
+def _caption(text: str, h: int, w: int = 150) -> np.ndarray:
+    """A caption cell (h, w, 3) in [0, 1]: the pattern's name on black."""
+    return label(np.zeros((h, w, 3), np.uint8), text.replace("_", " "), "caption").astype(np.float32) / 255.0
 
 
 def main(snakemake, log):
@@ -26,7 +24,7 @@ def main(snakemake, log):
         cells = [np.repeat((1.0 - m.channel("c"))[..., None], 3, -1) * mask for m in maps]
         cells.append(linear_to_srgb(np.clip(rgb, 0, 1)) * mask)
         pad = ((4, 4), (4, 4), (0, 0))
-        rows.append(np.concatenate([np.pad(_label(name, mask.shape[0]), pad)] + [np.pad(c, pad) for c in cells],
+        rows.append(np.concatenate([np.pad(_caption(name, mask.shape[0]), pad)] + [np.pad(c, pad) for c in cells],
                                    axis=1))
         c0 = maps[0].channel("c")[mask[..., 0] > 0]
         log.info(f"{name}: map 0 c in [{c0.min():.3f}, {c0.max():.3f}]")

@@ -14,7 +14,7 @@ def main(snakemake, log):
     size = spec["size"]
     mask = petal_shape(spec["shape"], size, lambda q: str(Path(snakemake.params.root) / q))
     ven = venation(spec["venation"], size)
-    p = rd_params(spec["rd"], snakemake.params.seed, size[1])
+    p = rd_params(spec["rd"], snakemake.params.seed, size[1], f"patterns.{snakemake.wildcards.pattern}.rd")
     log.info(f"pattern {snakemake.wildcards.pattern}: {size[0]}x{size[1]}, {int(mask.sum())} petal cells, "
              f"{0 if ven is None else int(ven.vascular.sum())} vascular; {p.to_dict()}")
     r = simulate(mask, ven, p, logger=log)

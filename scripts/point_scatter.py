@@ -4,9 +4,9 @@ import time
 
 from natscene.geometry import sun_direction
 from natscene.io import write_png, write_yaml
-from natscene.mie.demo import ratio_image
 from natscene.mie.phase import hg_table, read_table
 from natscene.mie.points import generate_points
+from natscene.mie.ratio_slice import ratio_image
 from natscene.mie.solver import save_solution, solve
 from natscene.runner import run
 from natscene.volume.grid import load_volume

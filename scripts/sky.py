@@ -2,6 +2,7 @@
 import numpy as np
 
 from natscene import io
+from natscene.config import settings_from_section
 from natscene.runner import run
 from natscene.sky import SkySettings, extract_sky
 from natscene.sky.extract import preview_panels
@@ -10,7 +11,7 @@ from natscene.sky.segmentation import decode_hand_mask
 
 def main(snakemake, log):
     name = snakemake.params.name
-    settings = SkySettings.from_config(snakemake.params.settings)
+    settings = settings_from_section(SkySettings, snakemake.params.settings, "sky")
     photo_path = snakemake.input.photo
     photo = io.read_photo(photo_path)
     log.info(f"photo {name}: {photo_path} ({photo.shape[1]}x{photo.shape[0]})")

@@ -2,6 +2,7 @@
 import numpy as np
 
 from natscene import io
+from natscene.errors import InputError
 from natscene.runner import run
 from natscene.sky.resample import area_resample, crop_box, resample_labels
 
@@ -9,7 +10,7 @@ from natscene.sky.resample import area_resample, crop_box, resample_labels
 def main(snakemake, log):
     tw, th = int(snakemake.wildcards.W), int(snakemake.wildcards.H)
     if tw < 1 or th < 1:
-        raise io.InputError(f"fit resolution {tw}x{th}: width and height must be >= 1")
+        raise InputError(f"fit resolution {tw}x{th}: width and height must be >= 1")
     photo = io.read_exr(snakemake.input.photo)
     mask = io.read_exr(snakemake.input.mask)
     sky = io.read_exr(snakemake.input.sky)

@@ -1,11 +1,13 @@
 """Rule `tileset`: GA-optimised ω-tile set from an example texture (Dong 2007 Ch. 5)."""
 import numpy as np
 
-from natscene.io import InputError, read_photo, write_exr, write_png, write_yaml
+from natscene.config import settings_from_section
+from natscene.errors import InputError
+from natscene.io import read_photo, write_exr, write_png, write_yaml
 from natscene.runner import run
 from natscene.tiles.construct import construct, diagram, to_atlas
 from natscene.tiles.embed import embed, grabcut_object
-from natscene.tiles.genetic import GAParams, max_tile_size, min_example_side, min_patch_positions
+from natscene.tiles.tile_ga import GAParams, max_tile_size, min_example_side, min_patch_positions
 from natscene.tiles.omega import tile_set
 
 
@@ -28,7 +30,7 @@ def main(snakemake, log):
                          f"{snakemake.input.example} ({W}x{H}) with set {ts.name}: it leaves "
                          f"{max(H - s + 1, 0) * max(W - s + 1, 0)} patch positions, the GA needs "
                          f"{min_patch_positions(ts.n)}; choose at most {best}")
-    params = GAParams.from_dict(spec["ga"])
+    params = settings_from_section(GAParams, spec["ga"], f"tiles.{name}.ga")
     log.info(f"{name}: example {W}x{H}, set {ts.name} ({ts.m} tiles, {ts.n} patches), tile {s}px")
     seams = spec["seams"]
     b = construct(example, ts, s, params, seed=int(spec["seed"]), margin=float(spec["margin"]),

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from natscene.io import InputError
+from natscene.errors import InputError
 
 BLENDER = shutil.which("blender")
 SCRIPT = Path(__file__).resolve().parents[1] / "tools" / "blender" / "render_vdb.py"

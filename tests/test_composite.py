@@ -371,7 +371,8 @@ def test_composite_frame_follows_the_shot_frame(tmp_path):
     camera-to-cloud distance, the shot's resolution and sky; a malformed state or a plate of the wrong size
     names the file."""
     from natscene.composite.inputs import build_set
-    from natscene.io import InputError, write_exr, write_yaml
+    from natscene.errors import InputError
+    from natscene.io import write_exr, write_yaml
     shot = _write_shot(tmp_path)
     spec = build_set(_shot_entry(), 3, str(tmp_path), str(tmp_path), shot)
     np.testing.assert_allclose(spec.camera.position, [0.2, 0.3, 0.0])
@@ -381,7 +382,7 @@ def test_composite_frame_follows_the_shot_frame(tmp_path):
     np.testing.assert_allclose(rgb, 4.5 * np.array([1.45, 0.92, 0.48]), rtol=3e-2)
     np.testing.assert_allclose(spec.atmosphere.kappa, [0.05, 0.12, 0.25])
     assert spec.atmosphere.reference_distance == pytest.approx(np.linalg.norm([0.2, 0.3 - 300.0, -1000.0]))
-    from natscene.keyframes.sky import preetham_rgb
+    from natscene.sky.daylight import preetham_rgb
     d = np.array([[0.0, 0.3, 1.0]]) / np.linalg.norm([0.0, 0.3, 1.0])
     np.testing.assert_allclose(spec.sky(d), preetham_rgb(d, sun_direction(105.0, 3.0)), rtol=1e-6)
     write_yaml(tmp_path / "shots/s/params/0004.yaml", {"sun": {"azimuth": 105.0}})
@@ -394,7 +395,8 @@ def test_composite_frame_follows_the_shot_frame(tmp_path):
 
 def test_pattern_without_alpha_names_the_file(tmp_path):
     from natscene.composite.inputs import build_set
-    from natscene.io import InputError, write_exr
+    from natscene.errors import InputError
+    from natscene.io import write_exr
     shot = _write_shot(tmp_path)
     write_exr(tmp_path / "patterns/p/color.exr", np.full((8, 8, 3), 0.5, np.float32), ["R", "G", "B"])
     entry = {**_shot_entry(), "meadow": {"area": {"near": 0.5, "far": 3.0, "half_angle": 30.0},
@@ -438,6 +440,7 @@ def test_cloud_above_the_horizon_for_the_main_job_camera():
     from natscene.config import load_yaml_config, validate_config
     from natscene.geometry import ray_box
     from natscene.keyframes.shot import resolve_keyframe
+    from natscene.volume.build import DEFAULT_ALTITUDE_M, DEFAULT_SIZE_M
     from natscene.volume.grid import placement
     from pathlib import Path
     root = Path(__file__).resolve().parents[1]
@@ -446,7 +449,9 @@ def test_cloud_above_the_horizon_for_the_main_job_camera():
     entry = next(e for e in cfg["composite"].values() if e.get("shot"))
     shot = cfg["shots"][entry["shot"]]
     vol = cfg["volumes"][shot["volume"]]
-    lo, hi = placement(vol["resolution"], vol["size"])
+    lo, hi = placement(vol["resolution"], vol.get("size") or DEFAULT_SIZE_M[vol["kind"]])  # as build_volume places it
+    alt = DEFAULT_ALTITUDE_M if vol.get("altitude") is None else float(vol["altitude"])
+    lo, hi = lo + np.array([0.0, alt, 0.0]), hi + np.array([0.0, alt, 0.0])
     W, H = shot["resolution"][0] // 4, shot["resolution"][1] // 4
     origin = np.asarray(entry["origin"], np.float64)
     for i, kf in enumerate(shot["keyframes"]):

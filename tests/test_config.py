@@ -4,7 +4,8 @@ from pathlib import Path
 
 import pytest
 
-from natscene.config import ConfigError, bundle_schema, load_yaml_config, validate_config
+from natscene.config import bundle_schema, load_yaml_config, validate_config
+from natscene.errors import ConfigError
 
 ROOT = Path(__file__).resolve().parents[1]
 SCHEMA = ROOT / "workflow" / "schemas" / "config.schema.yaml"

@@ -6,8 +6,9 @@ from pathlib import Path
 
 import pytest
 
-from natscene.config import ConfigError, load_yaml_config, validate_config
+from natscene.config import load_yaml_config, validate_config
 from natscene.config_checks import camera_problem, check_config, config_problems
+from natscene.errors import ConfigError
 from natscene.resources import MODEL, declared_mb, estimate_mem_mb, mem_mb, memory_problems
 
 ROOT = Path(__file__).resolve().parents[1]

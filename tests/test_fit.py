@@ -188,7 +188,7 @@ def test_restricted_composition_equals_full_image_at_footprint():
 
 
 def test_bad_inputs_are_named():
-    from natscene.io import InputError
+    from natscene.errors import InputError
     t = sphere_tables()
     sky = sky_image()
     with pytest.raises(InputError, match="no cloud pixels"):

@@ -27,8 +27,9 @@ import yaml
 from natscene.config import load_yaml_config
 from natscene.denoise.features import frame_features, view_features
 from natscene.denoise.noise import cloud_pixels, noise_figure
+from natscene.errors import InputError
 from natscene.geometry import Camera
-from natscene.io import InputError, read_exr, read_yaml
+from natscene.io import read_exr, read_yaml
 from natscene.keyframes.frame import apply_ratio, mie_ratio, unscattered
 from natscene.keyframes.shot import frame_camera, quantised_sun, sun_key, validate_shot
 from helpers import sphere_volume

@@ -4,6 +4,7 @@ import OpenImageIO as oiio
 import pytest
 
 from natscene import io
+from natscene.errors import InputError
 
 
 def test_exr_roundtrip_float32_bit_exact_with_attributes(tmp_path):
@@ -95,10 +96,10 @@ def test_read_photo_exr_is_linear_and_errors(tmp_path):
     pix = np.full((3, 4, 3), 2.5, np.float32)
     io.write_exr(tmp_path / "p.exr", pix)
     np.testing.assert_array_equal(io.read_photo(tmp_path / "p.exr"), pix)
-    with pytest.raises(io.InputError, match="not found"):
+    with pytest.raises(InputError, match="not found"):
         io.read_photo(tmp_path / "missing.jpg")
     (tmp_path / "junk.jpg").write_bytes(b"not an image")
-    with pytest.raises(io.InputError, match="junk.jpg"):
+    with pytest.raises(InputError, match="junk.jpg"):
         io.read_photo(tmp_path / "junk.jpg")
 
 

@@ -13,14 +13,14 @@ import numpy as np
 import pytest
 import yaml
 
+from natscene.errors import InputError
 from natscene.geometry import Camera, sun_direction
-from natscene.io import InputError
 from natscene.keyframes.animation import filmstrip, strip_indices, write_animation
 from natscene.keyframes.interpolate import (catmull_rom, direction_to_sun_angles, ease, lerp, segment_t,
                                             slerp)
 from natscene.keyframes.shot import (bracket, camera_neighbours, frame_state, keyframe_params,
                                      resolve_keyframe, validate_shot)
-from natscene.keyframes.sky import preetham_Yxy, preetham_rgb, zenith_Yxy
+from natscene.sky.daylight import preetham_Yxy, preetham_rgb, zenith_Yxy
 
 ROOT = Path(__file__).resolve().parents[1]
 

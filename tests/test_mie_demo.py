@@ -6,8 +6,9 @@ import numpy as np
 import pytest
 
 from natscene.geometry import sun_direction
-from natscene.mie.demo import angular_profile, deck_camera, deck_top, rim_peak, ring_contrast, silver_lining_camera
+from natscene.mie.cameras import deck_camera, deck_top, silver_lining_camera
 from natscene.mie.march import render_mie
+from natscene.mie.measure import angular_profile, rim_peak, ring_contrast
 from natscene.mie.phase import compute_mie_table, glory_ring_deg, hg_table
 from natscene.mie.points import generate_points, sample_density
 from natscene.mie.solver import solve

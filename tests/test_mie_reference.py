@@ -16,8 +16,7 @@ What is comparable:
 import numpy as np
 import pytest
 
-from natscene.geometry import Camera
-from natscene.mie.demo import _rotate
+from natscene.geometry import Camera, rotate
 from natscene.mie.march import march_terms
 from natscene.mie.phase import compute_mie_table
 from natscene.mie.points import generate_points
@@ -40,7 +39,7 @@ def setup():
 def camera_at(scattering_angle_deg, fov=24.0, res=32):
     """Camera looking at the sphere's centre with the given angle between the sunlight's propagation
     direction and the direction toward the camera."""
-    to_cam = _rotate(SUN, np.array([0.0, 1.0, 0.0]), np.radians(180.0 - scattering_angle_deg))
+    to_cam = rotate(SUN, np.array([0.0, 1.0, 0.0]), np.radians(180.0 - scattering_angle_deg))
     return Camera(tuple(CENTRE + 2.5 * to_cam), tuple(CENTRE), (0, 1, 0), fov, res, res)
 
 

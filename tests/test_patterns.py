@@ -63,7 +63,7 @@ def test_vein_carries_the_root_supply():
 
 
 def test_unstable_dt_is_refused():
-    from natscene.io import InputError
+    from natscene.errors import InputError
 
     p = RDParams(S=0.5, dt=10.0)
     assert p.dt > stable_dt(p)

@@ -85,14 +85,14 @@ def test_implicit_scheme_reaches_the_explicit_steady_state():
 
 
 def test_bad_scheme_is_refused():
-    from natscene.io import InputError
+    from natscene.errors import InputError
     with pytest.raises(InputError, match="scheme"):
         simulate(np.ones((8, 8), np.float32), None, RDParams(scheme="rk4"))
 
 
 def test_normalisation_modes():
     """'max' is Dong's c = C / C_0 (C_0 = the petal maximum); 'range' puts the petal minimum at c = 0."""
-    from natscene.io import InputError
+    from natscene.errors import InputError
     from natscene.patterns.reaction_diffusion import normalise
     mask = np.zeros((4, 5), np.float32)
     mask[1:3, 1:4] = 1

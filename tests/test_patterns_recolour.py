@@ -5,7 +5,7 @@ import pytest
 from scipy import ndimage
 
 from natscene.color import linear_to_srgb, luminance, srgb_to_yiq
-from natscene.io import InputError
+from natscene.errors import InputError
 from natscene.patterns.expression import express_rgb, precompute
 from natscene.patterns.pigments import pigment
 from natscene.patterns.presets import rd_params

@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 import natscene  # noqa: F401
+from natscene.errors import InputError
 from natscene.geometry import Camera, ray_box
-from natscene.io import InputError
 from natscene.scatter.compose import apply_atmosphere, compose, compose_cloud, lerp_weights
 from natscene.scatter.medium import make_medium
 from natscene.scatter.mitsuba_scene import render_reference, render_transmittance

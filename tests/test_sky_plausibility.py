@@ -9,6 +9,8 @@ import numpy as np
 import pytest
 
 from natscene import io
+from natscene.config import settings_from_section
+from natscene.errors import InputError
 from natscene.sky import SkySettings, extract_sky
 from natscene.sky.plausibility import PlausibilityLimits, findings, measure
 
@@ -76,7 +78,7 @@ BAD = {
 @pytest.mark.parametrize("case", list(BAD), ids=list(BAD))
 def test_implausible_photos_are_refused(kite, case):
     make, words = BAD[case]
-    with pytest.raises(io.InputError) as e:
+    with pytest.raises(InputError) as e:
         _extract(make(kite))
     msg = str(e.value)
     assert msg.startswith("test.jpg (photos.test)")
@@ -88,7 +90,7 @@ def test_implausible_photos_are_refused(kite, case):
 def test_flower_photo_as_in_the_issue(kite):
     """The issue's case: freshflower.jpg as a cloud photo gave c_in [2.99, 0.51, 0.01] and no warning."""
     m = None
-    with pytest.raises(io.InputError, match="1667 K"):
+    with pytest.raises(InputError, match="1667 K"):
         _extract(io.read_photo(FLOWER))
     res = _extract(io.read_photo(FLOWER), accept_unusual=True)
     m = res.plausibility
@@ -100,13 +102,13 @@ def test_flower_photo_as_in_the_issue(kite):
 
 
 def test_too_little_cloud_with_a_strict_threshold(kite):
-    with pytest.raises(io.InputError, match="too little cloud"):
+    with pytest.raises(InputError, match="too little cloud"):
         _extract(kite, threshold=0.01)
 
 
 def test_negative_linear_values(kite):
     exr = kite - 0.05
-    with pytest.raises(io.InputError, match=r"negative linear values.*photos.test.accept_unusual"):
+    with pytest.raises(InputError, match=r"negative linear values.*photos.test.accept_unusual"):
         _extract(exr)
     res = _extract(np.where(kite > 0.02, kite, kite - 0.001), accept_unusual=True)
     assert any("negative" in w for w in res.warnings)
@@ -117,7 +119,7 @@ def test_non_finite_values_are_always_refused(kite):
     bad = kite.copy()
     bad[10, 10, 1] = np.nan
     for accept in (False, True):
-        with pytest.raises(io.InputError, match="NaN"):
+        with pytest.raises(InputError, match="NaN"):
             _extract(bad, accept_unusual=accept)
 
 
@@ -125,7 +127,7 @@ def test_limits_are_configurable(kite):
     m = measure(kite, _extract(kite).labels, _extract(kite).sun.c_in)
     assert findings(m, PlausibilityLimits()) == []
     assert findings(m, PlausibilityLimits(min_sky_fraction=0.9))  # the kite photo has 84 % sky
-    assert PlausibilityLimits.from_config({"sun_cct_k": [1000, 3000]}).sun_cct_k == (1000, 3000)
+    assert settings_from_section(PlausibilityLimits, {"sun_cct_k": [1000, 3000]}, "sky.checks").sun_cct_k == (1000, 3000)
 
 
 # --------------------------------------------------------------------------------------- damaged files
@@ -143,7 +145,7 @@ def test_truncated_jpeg_is_refused_with_its_name(tmp_path, keep):
     n = keep if isinstance(keep, int) else int(len(data) * keep)
     bad = tmp_path / "cut.jpg"
     bad.write_bytes(data[:n])
-    with pytest.raises(io.InputError, match=r"cut\.jpg.*truncated JPEG"):
+    with pytest.raises(InputError, match=r"cut\.jpg.*truncated JPEG"):
         io.read_photo(bad)
 
 
@@ -158,7 +160,7 @@ def test_truncation_is_found_behind_an_exif_thumbnail(tmp_path, kite):
     assert io.read_photo(whole).shape == kite.shape  # a valid file with a thumbnail reads fine
     cut = tmp_path / "cut.jpg"
     cut.write_bytes(data[:len(data) // 2])
-    with pytest.raises(io.InputError, match="truncated JPEG"):
+    with pytest.raises(InputError, match="truncated JPEG"):
         io.read_photo(cut)
 
 
@@ -166,7 +168,7 @@ def test_truncated_png_and_decoder_errors(tmp_path):
     data = GRASS.read_bytes()
     cut = tmp_path / "cut.png"
     cut.write_bytes(data[: len(data) // 2])
-    with pytest.raises(io.InputError, match=r"cut\.png.*truncated PNG"):
+    with pytest.raises(InputError, match=r"cut\.png.*truncated PNG"):
         io.read_photo(cut)
     # a PNG whose IEND survives but whose image data is damaged: the decoder's error names the file
     broken = bytearray(data)
@@ -174,7 +176,7 @@ def test_truncated_png_and_decoder_errors(tmp_path):
     broken[i:i + 200] = bytes(200)
     bad = tmp_path / "broken.png"
     bad.write_bytes(bytes(broken))
-    with pytest.raises(io.InputError, match=r"broken\.png"):
+    with pytest.raises(InputError, match=r"broken\.png"):
         io.read_photo(bad)
 
 

@@ -134,7 +134,7 @@ def test_sun_spd_matches_c_in():
 
 def test_complex_index_strings():
     import pytest
-    from natscene.io import InputError
+    from natscene.errors import InputError
     from natscene.spectral.indices import complex_index
     wl = np.array([400.0, 550.0, 700.0])
     np.testing.assert_array_equal(complex_index("2.0+0.05j", wl), np.full(3, 2.0 + 0.05j))

@@ -7,11 +7,12 @@ import numpy as np
 import pytest
 import skimage.data
 
-from natscene.config import ConfigError, load_yaml_config, validate_config
+from natscene.config import load_yaml_config, validate_config
+from natscene.errors import ConfigError
+from natscene.tiles.blend import poisson_blend
 from natscene.tiles.construct import construct, from_atlas, intermediate_tiles, to_atlas
 from natscene.tiles.embed import embed, grabcut_object
-from natscene.tiles.genetic import GAParams, MatchCost, evaluation, quarter_layout, run_ga
-from natscene.tiles.blend import poisson_blend
+from natscene.tiles.tile_ga import GAParams, MatchCost, evaluation, quarter_layout, run_tile_ga
 from natscene.tiles.graphcut import (_tables, array_pair_values, axis_weights, build_tile, constraint_masks,
                                      intermediate_offsets, junction_extensions, merge, render,
                                      seam_energy, tile_energy)
@@ -198,7 +199,7 @@ def test_ga_improves_on_random_selection():
     ts = tile_set("N1")
     ratios = []
     for seed in range(3):
-        r = run_ga(ex, ts, 48, GAParams(), seed=seed)
+        r = run_tile_ga(ex, ts, 48, GAParams(), seed=seed)
         assert r.E <= r.initial_best_E                      # never worse than its initial population
         assert all(a["best"] >= b["best"] for a, b in zip(r.log, r.log[1:]))
         assert len(r.log) - 1 <= GAParams().n_g

@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 import natscene  # noqa: F401
+from natscene.errors import InputError
 from natscene.geometry import Camera
-from natscene.io import InputError
 from natscene.scatter.allorders import AllOrdersSettings, Lighting, Scene, view_images
 from natscene.scatter.bands import SUN_BANDS, band_table, band_weights, check_bands, fit_ratios
 from natscene.scatter.compose import compose

@@ -8,7 +8,7 @@ import textwrap
 import numpy as np
 import pytest
 
-from natscene.io import InputError
+from natscene.errors import InputError
 from natscene.volume import vdb
 from natscene.volume.build import build_volume
 

@@ -3,7 +3,7 @@ and clear errors on bad user grids."""
 import numpy as np
 import pytest
 
-from natscene.io import InputError
+from natscene.errors import InputError
 from natscene.volume import grid, measure, noise, procedural
 from natscene.volume.build import build_volume
 from natscene.volume.procedural import generate, statistics

@@ -11,9 +11,7 @@ from pathlib import Path
 
 import yaml
 
-
-class ConfigError(ValueError):
-    """The config is invalid; the message names the key path."""
+from natscene.errors import ConfigError
 
 
 def _key_path(path) -> str:
@@ -121,3 +119,31 @@ def resolve_path(path: str | os.PathLike, root: str | os.PathLike) -> str:
     """An input path from the config: absolute as given, else relative to the repository ``root``."""
     p = Path(os.path.expanduser(str(path)))
     return str(p if p.is_absolute() else Path(root) / p)
+
+
+def settings_from_section(cls, section: dict | None, key: str):
+    """A settings dataclass ``cls`` from a validated config section: the one way the library turns config into
+    settings.
+
+    - ``section`` holds the values (the schema filled its defaults in); a key missing from it takes the
+      dataclass's default, which equals the schema's (``tests/test_settings.py`` checks every pair);
+    - a key that names no field raises :class:`ConfigError` naming ``<key>.<name>`` and the allowed names
+      (the schema and the dataclass disagree, or an open section such as ``patterns.*.rd`` has a typo);
+    - a list becomes a tuple where the field is a tuple (``tuple`` annotation or default);
+    - ``cls.CONFIG_NAMES`` (optional) maps config names that are not Python identifiers to field names
+      (``lambda`` -> ``lam``).
+    """
+    import dataclasses
+
+    fields = {f.name: f for f in dataclasses.fields(cls) if f.init}
+    renames = getattr(cls, "CONFIG_NAMES", {})
+    kw = {}
+    for name, value in (section or {}).items():
+        field = renames.get(name, name)
+        if field not in fields:
+            allowed = sorted({v: k for k, v in renames.items()}.get(f, f) for f in fields)
+            raise ConfigError(f"config key '{key}.{name}': unknown setting; allowed: {', '.join(allowed)}")
+        f = fields[field]
+        is_tuple = isinstance(f.default, tuple) or str(f.type).startswith("tuple")
+        kw[field] = tuple(value) if is_tuple and isinstance(value, list) else value
+    return cls(**kw)

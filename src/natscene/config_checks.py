@@ -25,7 +25,8 @@ from pathlib import Path
 
 import numpy as np
 
-from natscene.config import ConfigError, resolve_path
+from natscene.config import resolve_path
+from natscene.errors import ConfigError
 
 
 class _Problems:

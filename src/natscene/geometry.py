@@ -19,6 +19,13 @@ def sun_direction(azimuth_deg: float, elevation_deg: float) -> np.ndarray:
     return np.array([np.cos(el) * np.sin(az), np.sin(el), np.cos(el) * np.cos(az)])
 
 
+def rotate(v, axis, angle_rad: float) -> np.ndarray:
+    """``v`` rotated about ``axis`` (any length) by ``angle_rad``, right-handed (Rodrigues' formula)."""
+    axis = axis / np.linalg.norm(axis)
+    return (v * np.cos(angle_rad) + np.cross(axis, v) * np.sin(angle_rad)
+            + axis * np.dot(axis, v) * (1 - np.cos(angle_rad)))
+
+
 def _normalize(v) -> np.ndarray:
     v = np.asarray(v, np.float64)
     n = np.linalg.norm(v)

@@ -30,12 +30,9 @@ import yaml
 
 from natscene import __version__
 from natscene.color import linear_to_srgb, luminance, srgb_to_linear
+from natscene.errors import InputError
 
 ATTR_PREFIX = "natscene:"
-
-
-class InputError(ValueError):
-    """Bad user input (file, image, config value); the message names it and says what to do."""
 
 
 class Image(NamedTuple):

@@ -23,7 +23,8 @@ from pathlib import Path
 
 import numpy as np
 
-from natscene.config import ConfigError, resolve_path
+from natscene.config import resolve_path
+from natscene.errors import ConfigError
 
 MB = 1024.0 * 1024.0
 MARGIN = 1.2  # declared = MARGIN * model + SLACK_MB

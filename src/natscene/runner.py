@@ -2,7 +2,7 @@
 
 Every ``scripts/*.py`` ends with ``run(snakemake, main)``. Before ``main`` runs, the temporary files that an
 earlier, killed run of the same job left beside its outputs are removed (:func:`natscene.io.remove_stale_temps`).
-A :class:`natscene.io.InputError` or :class:`natscene.config.ConfigError` (bad input, named by file or key) is
+A :class:`natscene.errors.InputError` or :class:`natscene.errors.ConfigError` (bad input, named by file or key) is
 reported as one line without a traceback and the job fails; anything else is a bug and keeps its traceback
 (on the terminal and in the rule's log file).
 """
@@ -13,8 +13,8 @@ import sys
 import time
 from pathlib import Path
 
-from natscene.config import ConfigError
-from natscene.io import InputError, remove_stale_temps
+from natscene.errors import ConfigError, InputError
+from natscene.io import remove_stale_temps
 
 
 def setup_logging(log_path: str | None, name: str = "natscene") -> logging.Logger:

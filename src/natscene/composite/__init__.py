@@ -2,4 +2,4 @@
 spectral rule. One concept per module: ``set_spec`` (what the set holds), ``inputs`` (config -> set),
 ``meadow`` / ``placement`` (where things go), ``flower``, ``maple``, ``beetle``, ``grass``, ``mesh`` (geometry),
 ``texture`` / ``footprint`` (filtered texturing), ``sky_dome`` (sky radiance and irradiance), ``tracer`` (ray
-casting), ``renderer`` (hybrid shading), ``full_spectral`` (the reference), ``hybrid`` (the intermediate image)."""
+casting), ``set_geometry`` (the rays every mode shares), ``renderer`` (hybrid shading), ``full_spectral`` (the reference), ``hybrid`` (the intermediate image)."""

@@ -25,7 +25,8 @@ import time
 
 import numpy as np
 
-from natscene.composite.renderer import KIND_FILM, KIND_GROUND, KIND_SKY, KIND_SURFACE, Hits, MirrorHits, SetRenderer
+from natscene.composite.renderer import SetRenderer
+from natscene.composite.set_geometry import KIND_FILM, KIND_GROUND, KIND_SKY, KIND_SURFACE, Hits, MirrorHits
 from natscene.spectral.grid import spectrum_to_rgb_matrix
 from natscene.spectral.upsampling import rgb_to_radiance, rgb_to_reflectance
 

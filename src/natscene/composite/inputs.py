@@ -25,8 +25,9 @@ from natscene.composite.meadow import build_meadow
 from natscene.composite.set_spec import Atmosphere, Film, Ground, SetSpec, sun_spectrum_from_rgb
 from natscene.composite.sky_dome import gradient_sky, shot_sky
 from natscene.composite.texture import MipTexture
+from natscene.errors import InputError
 from natscene.geometry import Camera, sun_direction
-from natscene.io import InputError, read_photo, read_yaml
+from natscene.io import read_photo, read_yaml
 from natscene.spectral.grid import WavelengthGrid
 
 

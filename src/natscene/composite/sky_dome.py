@@ -1,8 +1,9 @@
 """The sky dome that lights the set: the frame's sky radiance toward any direction, and the irradiance it
 gives a surface of any orientation.
 
-Radiance. With a shot, the sky is the one behind the clouds of the frame (:mod:`natscene.keyframes.sky`:
-Preetham et al. 1999 following the frame's sun, or the shot's constant colour), so the set, the haze over
+Radiance. With a shot, the sky is the one behind the clouds of the frame
+(:func:`natscene.sky.daylight.shot_sky_radiance`: Preetham et al. 1999 following the frame's sun, or the shot's
+constant colour), so the set, the haze over
 the ground and the plate agree; without one, a zenith-to-horizon blend in sqrt(max(y, 0)). Below the
 horizon a set on an infinite ground sees the ground: its radiance is the ground's mean albedo ρ̄ times its
 irradiance over π, L_g = ρ̄/π · (E_sun·sin(elevation) + E_sky(up)) (one bounce).
@@ -50,18 +51,12 @@ def gradient_sky(zenith, horizon) -> Callable[[np.ndarray], np.ndarray]:
 
 def shot_sky(settings: dict, sun_dir) -> Callable[[np.ndarray], np.ndarray]:
     """Radiance function of a shot's sky (a validated ``shots.<name>.sky``) for the frame's sun: the sky the
-    frame's clouds were rendered in front of (:func:`natscene.keyframes.sky.sky_image`)."""
-    from natscene.keyframes.sky import preetham_rgb
-    model = settings.get("model", "preetham")
-    if model == "constant":
-        c = np.asarray(settings.get("color", [0.3, 0.45, 0.8]), np.float32)
-        return lambda dirs: np.broadcast_to(c, (np.shape(dirs)[0], 3)).copy()
-    if model != "preetham":
-        raise ValueError(f"unknown sky model {model!r}")
+    frame's clouds were rendered in front of (:func:`natscene.sky.daylight.shot_sky_radiance`)."""
+    from natscene.sky.daylight import shot_sky_radiance
+    if settings.get("model", "preetham") not in ("preetham", "constant"):
+        raise ValueError(f"unknown sky model {settings.get('model')!r}")
     s = np.asarray(sun_dir, np.float64)
-    return lambda dirs: preetham_rgb(np.asarray(dirs, np.float64), s, settings.get("turbidity", 3.0),
-                                     settings.get("zenith_luminance", 0.3), settings.get("reference_elevation", 35.0),
-                                     settings.get("min_view_elevation", 1.0))
+    return lambda dirs: shot_sky_radiance(settings, np.asarray(dirs, np.float64), s)
 
 
 class SkyDome:

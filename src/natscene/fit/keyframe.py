@@ -15,7 +15,7 @@ from natscene.fit.gradient import gradient_descent
 from natscene.fit.kappa import kappa_grid
 from natscene.fit.objective import Levels
 from natscene.fit.problem import FitProblem
-from natscene.io import InputError
+from natscene.errors import InputError
 
 
 def effective_ranges(settings: dict, tables, log=None) -> dict:

@@ -15,7 +15,7 @@ import numpy as np
 from natscene.fit.genetic import PARAMS, fit_params
 from natscene.fit.kappa import KappaSearch
 from natscene.fit.objective import Levels
-from natscene.io import InputError
+from natscene.errors import InputError
 
 
 def restrict_tables(tables, mask: np.ndarray):

@@ -13,19 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from natscene.io import atomic_path, to_srgb8
-
-
-def _label(tile: np.ndarray, text: str) -> np.ndarray:
-    import cv2
-
-    h = tile.shape[0]
-    scale = max(0.8, h / 300.0)
-    thick = max(1, int(round(scale)))
-    org = (5, int(12 * scale) + 5)
-    out = np.ascontiguousarray(tile)
-    cv2.putText(out, text, org, cv2.FONT_HERSHEY_SIMPLEX, scale * 0.5, (0, 0, 0), thick + 2, cv2.LINE_AA)
-    cv2.putText(out, text, org, cv2.FONT_HERSHEY_SIMPLEX, scale * 0.5, (255, 255, 255), thick, cv2.LINE_AA)
-    return out
+from natscene.preview import label
 
 
 def contact_sheet(photo: np.ndarray, images: list, labels: list, columns: int = 4, exposure: float = 1.0,
@@ -38,7 +26,7 @@ def contact_sheet(photo: np.ndarray, images: list, labels: list, columns: int = 
     h, w = tiles[0].shape[:2]
     f = max(1, int(np.ceil(min_width / w)))
     tiles = [np.repeat(np.repeat(t, f, 0), f, 1) for t in tiles]
-    tiles = [_label(t, s) for t, s in zip(tiles, ["photo"] + list(labels))]
+    tiles = [label(t, s) for t, s in zip(tiles, ["photo"] + list(labels))]
     h, w = h * f, w * f
     cols = min(columns, len(tiles))
     rows = int(np.ceil(len(tiles) / cols))

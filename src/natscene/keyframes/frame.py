@@ -40,7 +40,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from natscene.io import InputError
+from natscene.errors import InputError
 
 
 def mie_ratio(m_mie: np.ndarray, m_hg: np.ndarray, transmittance: np.ndarray | None = None,

@@ -13,8 +13,8 @@ import bisect
 
 import numpy as np
 
+from natscene.errors import InputError
 from natscene.geometry import sun_direction
-from natscene.io import InputError
 from natscene.keyframes.interpolate import (catmull_rom, direction_to_sun_angles, ease, lerp, segment_t,
                                             slerp)
 

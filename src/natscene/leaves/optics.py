@@ -6,8 +6,8 @@ R = L - T_0 - A_0 - sum_p c_p A_p). We use the PROSPECT-D leaf optics model inst
 coefficients of chlorophyll a+b, carotenoids and anthocyanins times their contents (Beer's law inside
 the plates) — the same linear-absorption idea with multiple scattering in the mesophyll and measured
 spectra. The reflectance R(lambda) is then turned into colour with Eqs. 4.1-4.2 (CIE 1931 CMFs under
-an illuminant, colour-science), normalised so a perfect white reflector has Y = 1, and converted to
-linear sRGB by natscene.color.
+an illuminant, on the pigment grid, from :mod:`natscene.spectral.grid`), normalised so a perfect white
+reflector has Y = 1, and converted to linear sRGB by natscene.color.
 
 Normalised concentrations c map to contents: Cab = c_ch * cab_max (ug/cm^2), Car = c_ca * car_max,
 Anth = c_an * ant_max.
@@ -17,8 +17,8 @@ from __future__ import annotations
 import numpy as np
 
 from natscene.color import xyz_to_linear_srgb
-from natscene.patterns.expression import cmfs_and_illuminant
-from natscene.patterns.pigments import WAVELENGTHS
+from natscene.patterns.pigments import GRID, WAVELENGTHS
+from natscene.spectral.grid import cmfs, illuminant_table
 
 
 def prospect_reflectance(cab: float, car: float, ant: float, n: float = 1.5, cbrown: float = 0.0,
@@ -32,7 +32,7 @@ def prospect_reflectance(cab: float, car: float, ant: float, n: float = 1.5, cbr
 
 def reflectance_to_rgb(refl: np.ndarray, illuminant: str = "D65") -> np.ndarray:
     """Eqs. 4.1-4.2: reflectance spectra (..., N) -> linear sRGB (..., 3)."""
-    cmf, L = cmfs_and_illuminant(illuminant)
+    cmf, L = cmfs(GRID), illuminant_table(illuminant, GRID)
     xyz = (np.asarray(refl, float) * L) @ cmf / float(L @ cmf[:, 1])
     return np.maximum(xyz_to_linear_srgb(xyz), 0.0).astype(np.float32)
 

@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from natscene.io import InputError
+from natscene.errors import InputError
 
 DAYS = 365
 

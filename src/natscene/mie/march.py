@@ -30,8 +30,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
+from natscene.errors import InputError
 from natscene.geometry import ray_box
-from natscene.io import InputError
 from natscene.mie.phase import PhaseTable
 from natscene.mie.solver import Solution, cone_averaged_lut
 

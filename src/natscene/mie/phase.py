@@ -19,7 +19,8 @@ droplet population:
   ``2π ∫_{-1}^{1} p(μ) dμ = 1``.
 
 The table is the ``A_m = Mie(θ)`` of Eqs. 4–6 (as ``4π p``: 1 for isotropic scattering, see
-:mod:`natscene.mie.solver`). A Henyey–Greenstein table in the same format gives like-for-like comparisons.
+:mod:`natscene.mie.solver`). A Henyey–Greenstein table in the same format (:func:`hg_table`, the HG function of
+:mod:`natscene.phase`) gives like-for-like comparisons.
 """
 from __future__ import annotations
 
@@ -27,6 +28,8 @@ import os
 from dataclasses import dataclass, field
 
 import numpy as np
+
+from natscene.phase import hg
 
 os.environ.setdefault("MIEPYTHON_USE_JIT", "1")  # 60x faster; must be set before miepython is imported
 
@@ -111,12 +114,6 @@ def mie_phase_polydisperse(wavelength_nm: float, theta_rad: np.ndarray, r_eff_um
     return p / sphere_integral(theta_rad, p)[0]
 
 
-def henyey_greenstein(cos_theta, g: float) -> np.ndarray:
-    """HG phase function (1/sr), normalised over the sphere; cos_theta between propagation directions."""
-    c = np.asarray(cos_theta, np.float64)
-    return (1 - g * g) / (4 * np.pi * (1 + g * g - 2 * g * c) ** 1.5)
-
-
 @dataclass
 class PhaseTable:
     """A tabulated phase function per channel: ``theta`` (rad, ascending 0..π), ``rgb`` (n, 3) and
@@ -187,7 +184,7 @@ def compute_mie_table(r_eff_um: float = 10.0, v_eff: float = 0.1, n_radii: int =
 def hg_table(g: float, theta_deg: np.ndarray | None = None) -> PhaseTable:
     """A Henyey–Greenstein phase table (same g in R, G, B) in the format of the Mie table."""
     th = np.radians(angle_grid_deg() if theta_deg is None else np.asarray(theta_deg, np.float64))
-    p = henyey_greenstein(np.cos(th), g)
+    p = hg(np.cos(th), g)
     p = p / sphere_integral(th, p)[0]
     return PhaseTable(th, np.repeat(p[:, None], 3, axis=1), None, None, {"kind": "hg", "g": g})
 
@@ -237,7 +234,8 @@ def write_table(path, table: PhaseTable, stage: str = "mie_table") -> None:
 
 def read_table(path) -> PhaseTable:
     """Read a table written by :func:`write_table` (renormalised over the sphere in float64)."""
-    from natscene.io import InputError, read_exr
+    from natscene.errors import InputError
+    from natscene.io import read_exr
     img = read_exr(path)
     for c in ("theta", "R", "G", "B"):
         if c not in img.channels:

@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.ndimage import map_coordinates
 
-from natscene.io import InputError
+from natscene.errors import InputError
 
 
 def light_basis(sun_dir) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -29,7 +29,7 @@ import mitsuba as mi
 from natscene.mie.march import lattice_fields
 from natscene.mie.phase import PhaseTable
 from natscene.mie.solver import Solution
-from natscene.scatter.medium import _mi
+from natscene.scatter.medium import active_mitsuba
 from natscene.scatter.mitsuba_scene import scene_dict
 
 
@@ -63,7 +63,7 @@ def reference_scene(volume, camera, sun_dir, solution: Solution, table: PhaseTab
                     irradiance: float = 1.0, albedo: float = 1.0, max_depth: int = 64, spp: int = 256,
                     ratio: np.ndarray | None = None, n_cos: int = 100_001):
     """The loaded Mitsuba scene of one channel (``ratio``: a precomputed :func:`ratio_grid`)."""
-    _mi()
+    active_mitsuba()
     p = solution.points
     sigma_t = p.sigma_e / float(volume.extinction_scale)
     d = scene_dict(volume, camera, sun_dir, sigma_t, 0.0, albedo, (irradiance,) * 3, max_depth, spp)
@@ -89,7 +89,7 @@ def render_reference_mie(volume, camera, sun_dir, solution: Solution, table: Pha
     params = params or {}
     sd = np.asarray(sun_dir, float) / np.linalg.norm(sun_dir)
     if float(np.dot(sd, solution.points.sun_dir)) < 1 - 1e-6:
-        from natscene.io import InputError
+        from natscene.errors import InputError
         raise InputError("mie.reference: the solution was solved for another sun direction; rerun point_scatter")
     c_in = np.broadcast_to(np.asarray(params.get("c_in", (1.0, 1.0, 1.0)), np.float64), (3,))
     L_in = float(params.get("L_in", 1.0))

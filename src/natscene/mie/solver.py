@@ -17,8 +17,8 @@ vectorised over all pairs with numpy:
   there, ``h²/d²`` the solid angle of the receiving cell, ``n_src ≤ 1`` renormalises each source so that
   it never sends more than it scattered (albedo ``ω``, default 1: water droplets do not absorb visible
   light). No pass creates energy: ``Σ s_dst Co_dst ≤ ω Σ s_src Ci_src``;
-- after each pass (main function): Eq. 1, ``R_i ← R_i - R_i e^(-|L_sum|)``, ``L_i ← L_sum / |L_sum|``,
-  ``Ci += Co``. ``|L_sum|`` is measured, as the thesis argues (vectors from all directions cancel, from one
+- after each pass (main function, :func:`update_mie_isotropic_ratio`): Eq. 1, ``R_i ← R_i - R_i e^(-|L_sum|)``,
+  ``L_i ← L_sum / |L_sum|``, ``Ci += Co``. ``|L_sum|`` is measured, as the thesis argues (vectors from all directions cancel, from one
   direction add up), by the coherence of the received light, the length of the light-weighted mean
   direction (1: all from one direction, 0: from all directions), times ``coherence_scale``: without a
   relative measure the absolute light level (an arbitrary unit) would decide R_i;
@@ -38,7 +38,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from natscene.color import LUMA_709
-from natscene.io import InputError
+from natscene.errors import InputError
 from natscene.mie.phase import PhaseTable
 from natscene.mie.points import PointCloud
 
@@ -134,6 +134,23 @@ def _lookup(lut: np.ndarray, cos: np.ndarray) -> np.ndarray:
     return lut[i0] * (1 - f) + lut[i0 + 1] * f
 
 
+def update_mie_isotropic_ratio(ratio: np.ndarray, direction: np.ndarray, lvec: np.ndarray, lmag: np.ndarray,
+                               coherence_scale: float) -> tuple[np.ndarray, np.ndarray]:
+    """Eq. 1, the thesis' main function, after a pass: the Mie/isotropic ratio ``R_i <- R_i - R_i e^(-|L_sum|)``
+    and the prominent light direction ``L_i <- L_sum / |L_sum|`` of every point that received light.
+
+    ``lvec`` (N, 3): the light-weighted sum of the received light's directions (Eq. 5's L_sum); ``lmag`` (N,): the
+    received light (luminance); ``|L_sum|`` is their coherence ``|lvec| / lmag`` (1: all from one direction, 0: from
+    all directions) times ``coherence_scale`` (see the module docstring). Returns (ratio float32 (N,), direction);
+    ``direction`` (N, 3) is updated in place."""
+    length = np.linalg.norm(lvec, axis=1)
+    got = (lmag > 0) & (length > 0)
+    coherence = np.where(got, length / np.where(got, lmag, 1), 0.0)
+    ratio = np.where(got, ratio - ratio * np.exp(-coherence_scale * coherence), ratio).astype(np.float32)
+    direction[got] = (lvec[got] / length[got, None]).astype(np.float32)
+    return ratio, direction
+
+
 def solve(points: PointCloud, table: PhaseTable, passes: int = 10, radius: float = 2.5,
           coherence_scale: float = 5.0, albedo: float = 1.0, min_attenuation: float = 1e-3,
           log=None, keep_history: bool = False):
@@ -199,11 +216,7 @@ def solve(points: PointCloud, table: PhaseTable, passes: int = 10, radius: float
                 lvec[:, c] += np.bincount(dst, lum * ud[:, c], minlength=n)
         del phase
         # Main function (Eq. 1): R_i <- R_i - R_i exp(-|L_sum|), L_i <- L_sum/|L_sum|, Ci += Co.
-        length = np.linalg.norm(lvec, axis=1)
-        got = (lmag > 0) & (length > 0)
-        coherence = np.where(got, length / np.where(got, lmag, 1), 0.0)
-        ratio = np.where(got, ratio - ratio * np.exp(-coherence_scale * coherence), ratio).astype(np.float32)
-        direction[got] = (lvec[got] / length[got, None]).astype(np.float32)
+        ratio, direction = update_mie_isotropic_ratio(ratio, direction, lvec, lmag, coherence_scale)
         scattered += co
         light = co.astype(np.float32)
         energy.append(np.sum(s[:, None] * co, axis=0) * h * h)

@@ -13,8 +13,9 @@ concentrations c_i (Beer's law linearised, A_c = c A):
     X^(k) = X_0^(k) - sum_i c_i X_Ai^(k)                    (Eq. 3.9)
     V_c   = V_0 - sum_i c_i V_Ai       (V with v = ybar)    (Eq. 3.10)
 
-xbar_k are the CIE 1931 2-degree colour-matching functions (colour-science). Tristimulus values are
-normalised so that the illuminant itself has Y = 1, and converted to linear sRGB by natscene.color.
+xbar_k are the CIE 1931 2-degree colour-matching functions and L(lambda) the illuminant's table, both on the
+pigment grid from :mod:`natscene.spectral.grid`. Tristimulus values are normalised so that the illuminant
+itself has Y = 1, and converted to linear sRGB by natscene.color.
 
 Tissue transmittance T: the PROSPECT-D transmittance of a pigment-free petal layer (N = 1.2,
 water 0.005 cm, dry matter 0.002 g/cm^2), i.e. measured leaf-tissue optics standing in for the
@@ -25,23 +26,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 from functools import lru_cache
 
-import colour
 import numpy as np
 
 from natscene.color import xyz_to_linear_srgb
-from natscene.io import InputError
-from natscene.patterns.pigments import WAVELENGTHS, Pigment
-
-
-@lru_cache(maxsize=4)
-def cmfs_and_illuminant(illuminant: str = "D65"):
-    """(xbar, ybar, zbar) (N, 3) and the illuminant SPD (N,) on WAVELENGTHS, via colour-science."""
-    shape = colour.SpectralShape(WAVELENGTHS[0], WAVELENGTHS[-1], WAVELENGTHS[1] - WAVELENGTHS[0])
-    cmf = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"].copy().align(shape)
-    if illuminant not in colour.SDS_ILLUMINANTS:
-        raise InputError(f"unknown illuminant '{illuminant}'; use a colour-science name such as D65, D50, A")
-    ill = colour.SDS_ILLUMINANTS[illuminant].copy().align(shape)
-    return np.asarray(cmf.values, float), np.asarray(ill.values, float)
+from natscene.errors import InputError
+from natscene.patterns.pigments import GRID, WAVELENGTHS, Pigment
+from natscene.spectral.grid import cmfs, illuminant_table
 
 
 @lru_cache(maxsize=4)
@@ -74,7 +64,7 @@ def precompute(pigments: list[Pigment], illuminant: str = "D65", transmittance: 
                base_reflectance: float = 1.0) -> ColourTable:
     """Eq. 3.8 for each pigment. ``transmittance`` T(lambda)/L(lambda) as a fraction (default PROSPECT-D
     tissue); ``base_reflectance`` scales L - T (1 = all non-transmitted light is reflected)."""
-    cmf, L = cmfs_and_illuminant(illuminant)
+    cmf, L = cmfs(GRID), illuminant_table(illuminant, GRID)
     T = tissue_transmittance() if transmittance is None else np.broadcast_to(np.asarray(transmittance, float),
                                                                             WAVELENGTHS.shape)
     norm = float(L @ cmf[:, 1])

@@ -12,8 +12,9 @@ with band centres from the pigment literature: betanin (red-violet betacyanin) 5
 (yellow betaxanthin) 476 nm, aureusidin (yellow aurone) 399/~420 nm, a generic "green absorber" at
 540 nm. A pigment named ``blank`` absorbs nothing ("blank pigment" of §3.3.2 for one-pigment flowers).
 
-Wavelength grid: 400-770 nm in 5 nm steps. Dong integrates over 380-770 nm; PROSPECT-D starts at
-400 nm, and the CIE 1931 colour-matching functions carry < 0.2 % of Y below 400 nm.
+Wavelength grid: :data:`GRID`, a :class:`natscene.spectral.grid.WavelengthGrid` of 400-770 nm in 5 nm steps.
+Dong integrates over 380-770 nm; PROSPECT-D starts at 400 nm, and the CIE 1931 colour-matching functions carry
+< 0.2 % of Y below 400 nm.
 """
 from __future__ import annotations
 
@@ -22,9 +23,12 @@ from functools import lru_cache
 
 import numpy as np
 
-from natscene.io import InputError
+from natscene.errors import InputError
+from natscene.spectral.grid import WavelengthGrid
 
-WAVELENGTHS = np.arange(400.0, 771.0, 5.0)
+#: the wavelength grid of the pigment spectra, flower colour expression and leaf colour
+GRID = WavelengthGrid(400.0, 770.0, 5.0)
+WAVELENGTHS = GRID.wavelengths
 
 #: parametric bands: name -> list of (centre nm, sigma nm, relative height)
 BAND_PIGMENTS = {

@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from natscene.io import InputError, read_mask
+from natscene.config import settings_from_section
+from natscene.errors import InputError
+from natscene.io import read_mask
 from natscene.patterns.reaction_diffusion import RDParams, schnakenberg_constants
 from natscene.patterns.venation import parametric_petal, radial_venation_spec, venation_from_nodes
 
@@ -85,9 +87,10 @@ def venation(spec: dict, size):
     raise InputError(f"venation kind '{kind}': use 'radial', 'nodes' or 'none'")
 
 
-def rd_params(spec: dict, seed: int, height: int = REFERENCE_HEIGHT) -> RDParams:
-    """RDParams from a config ``rd`` entry: a preset's values (Table 3.3, plus ``preset_state`` for the four
-    Fig. 3.3 presets on a grid of ``height`` rows), overridden by any key given explicitly."""
+def rd_params(spec: dict, seed: int, height: int = REFERENCE_HEIGHT, key: str = "patterns.<name>.rd") -> RDParams:
+    """RDParams from a config ``rd`` entry (config key ``key``): a preset's values (Table 3.3, plus
+    ``preset_state`` for the four Fig. 3.3 presets on a grid of ``height`` rows), overridden by any key given
+    explicitly; the keys neither sets take RDParams' defaults (Table 3.1)."""
     spec = dict(spec)
     preset = spec.pop("preset", None)
     base = {}
@@ -99,4 +102,4 @@ def rd_params(spec: dict, seed: int, height: int = REFERENCE_HEIGHT) -> RDParams
             base.update(preset_state(preset, height))
     base.update(spec)
     base.setdefault("seed", seed)
-    return RDParams.from_dict(base)
+    return settings_from_section(RDParams, base, key)

@@ -30,7 +30,7 @@ import numpy as np
 from scipy import ndimage
 
 from natscene.color import linear_srgb_to_lab, linear_to_srgb, srgb_to_linear, srgb_to_yiq, yiq_to_srgb
-from natscene.io import InputError
+from natscene.errors import InputError
 
 
 def flower_mask(photo_linear: np.ndarray, s_min: float = 0.35, v_min: float = 0.08) -> np.ndarray:
@@ -117,7 +117,7 @@ def recolour_photo(photo_path, spec: dict, seed: int = 0, logger=None) -> dict:
     small = resize(photo, (sh, sw, 3), anti_aliasing=True).astype(np.float32)
     msmall = (resize(mask, (sh, sw), order=0) > 0.5).astype(np.float32)
     ven = venation_from_photo(luminance(small), msmall, tuple(spec["root"]))
-    p = rd_params(spec["rd"], seed, sh)
+    p = rd_params(spec["rd"], seed, sh, "recolour.*.rd")
     r = simulate(msmall, ven, p, logger=logger)
     pct = float(spec["c0_percentile"])
     maps = [normalise(x, msmall, standard_concentration(x, msmall, pct)) for x in (r.a, r.b)]

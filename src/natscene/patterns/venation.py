@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import ndimage
 
-from natscene.io import InputError
+from natscene.errors import InputError
 
 
 @dataclass

@@ -32,7 +32,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from natscene.io import InputError
+from natscene.errors import InputError
 from natscene.scatter.phase import INV_4PI
 
 PARAM_KEYS = ("c_in", "L_in", "g", "sigma_t", "beta", "L_amb", "kappa_a")

@@ -10,18 +10,11 @@ from __future__ import annotations
 import numpy as np
 
 from natscene.io import to_srgb8
+from natscene.preview import label
 
 
 def _nearest(grid, x) -> int:
     return int(np.argmin(np.abs(np.asarray(grid) - x)))
-
-
-def _label(tile: np.ndarray, text: str) -> np.ndarray:
-    import cv2
-    out = np.ascontiguousarray(tile)
-    scale = max(0.3, tile.shape[1] / 640)
-    cv2.putText(out, text, (3, int(14 * scale / 0.5)), cv2.FONT_HERSHEY_SIMPLEX, scale, (255, 255, 0), 1, cv2.LINE_AA)
-    return out
 
 
 def contact_sheet(tables, sigmas=(0.2, 0.5, 1.0), gs=(0.0, 0.5, 0.9)) -> np.ndarray:
@@ -33,7 +26,7 @@ def contact_sheet(tables, sigmas=(0.2, 0.5, 1.0), gs=(0.0, 0.5, 0.9)) -> np.ndar
         for s in sigmas:
             i = _nearest(tables.sigma_t, s)
             exp = 1.0 if name == "T" else "auto"
-            tiles.append(_label(to_srgb8(arr[i], exp), f"{name} s={tables.sigma_t[i]:g}"))
+            tiles.append(label(to_srgb8(arr[i], exp), f"{name} s={tables.sigma_t[i]:g}", "table"))
         rows.append(np.concatenate(tiles, axis=1))
     si = _nearest(tables.sigma_t, 0.5)
     if getattr(tables, "transport", "dobashi") == "all_orders":
@@ -48,14 +41,15 @@ def contact_sheet(tables, sigmas=(0.2, 0.5, 1.0), gs=(0.0, 0.5, 0.9)) -> np.ndar
                 else:
                     w = band_weights(tables.sky_bands, tables.sky_ratios[gi, si], 0.99)[0]
                     img = np.moveaxis(np.tensordot(w, tables.sky_ms[:3, :, gi, si], (0, 1)), 0, -1)
-                tiles.append(_label(to_srgb8(img), f"{name} all orders g={tables.g[gi]:g} s={tables.sigma_t[si]:g}"))
+                tiles.append(label(to_srgb8(img), f"{name} all orders g={tables.g[gi]:g} s={tables.sigma_t[si]:g}",
+                                   "table"))
             rows.append(np.concatenate(tiles, axis=1))
         return np.concatenate(rows, axis=0)
     for ki, k in enumerate(tables.orders):
         tiles = []
         for g in gs:
             gi = _nearest(tables.g, g)
-            tiles.append(_label(to_srgb8(tables.multiple[ki, gi, si]),
-                                f"E{k} g={tables.g[gi]:g} s={tables.sigma_t[si]:g}"))
+            tiles.append(label(to_srgb8(tables.multiple[ki, gi, si]),
+                               f"E{k} g={tables.g[gi]:g} s={tables.sigma_t[si]:g}", "table"))
         rows.append(np.concatenate(tiles, axis=1))
     return np.concatenate(rows, axis=0)

@@ -21,11 +21,14 @@ import mitsuba as mi
 from natscene.variant import select_variant
 
 
-def _mi():
+def active_mitsuba():
     """The mitsuba module with a variant active (selects one on first use)."""
     if mi.variant() is None:
         select_variant()
     return mi
+
+
+_mi = active_mitsuba  # the scatter package's own short name
 
 
 @dataclass
@@ -80,7 +83,7 @@ class Medium:
 
 
 def _check_volume(volume) -> np.ndarray:
-    from natscene.io import InputError
+    from natscene.errors import InputError
     d = np.asarray(volume.density, np.float32)
     if d.ndim != 3 or d.size == 0:
         raise InputError(f"volume density must be a 3-D [nz, ny, nx] grid, got shape {d.shape}")

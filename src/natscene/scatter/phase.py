@@ -1,37 +1,5 @@
-"""Henyey–Greenstein phase function, normalised over the sphere (Dobashi 2012 §3, Table 1: g).
+"""The Henyey–Greenstein phase function of the cloud transport: :mod:`natscene.phase` (its one home), under the
+names the scatter package has always imported from here."""
+from natscene.phase import INV_4PI, hg, hg_dr, hg_sample_cos_dr
 
-p(cos θ, g) = (1 - g²) / (4π (1 + g² - 2 g cos θ)^{3/2}), θ the angle between the propagation directions
-before and after scattering (g > 0: forward scattering). Works on numpy arrays and Dr.Jit arrays; the
-sampler inverts the CDF (g = 0: uniform on the sphere).
-"""
-from __future__ import annotations
-
-import math
-
-import numpy as np
-
-INV_4PI = 1.0 / (4.0 * math.pi)
-
-
-def hg(cos_theta, g):
-    """Henyey–Greenstein phase function (numpy: broadcasts over cos_theta and g)."""
-    cos_theta = np.asarray(cos_theta, np.float64)
-    g = np.asarray(g, np.float64)
-    return (1.0 - g * g) * INV_4PI / (1.0 + g * g - 2.0 * g * cos_theta) ** 1.5
-
-
-def hg_dr(cos_theta, g):
-    """Henyey–Greenstein phase function on Dr.Jit arrays (g a Python float or a Dr.Jit Float)."""
-    import drjit as dr
-    denom = 1.0 + g * g - 2.0 * g * cos_theta
-    return (1.0 - g * g) * INV_4PI * dr.rsqrt(denom * denom * denom)
-
-
-def hg_sample_cos_dr(u, g):
-    """cos θ distributed as HG(g) from a uniform u in [0, 1) (Dr.Jit; g scalar or per-lane Float)."""
-    import drjit as dr
-    g_safe = dr.select(dr.abs(g) < 1e-3, 1e-3, g)
-    sq = (1.0 - g_safe * g_safe) / (1.0 - g_safe + 2.0 * g_safe * u)
-    cos_hg = (1.0 + g_safe * g_safe - sq * sq) / (2.0 * g_safe)
-    cos_iso = 1.0 - 2.0 * u
-    return dr.clip(dr.select(dr.abs(g) < 1e-3, cos_iso, cos_hg), -1.0, 1.0)
+__all__ = ["INV_4PI", "hg", "hg_dr", "hg_sample_cos_dr"]

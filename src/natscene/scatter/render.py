@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from natscene.io import InputError
+from natscene.errors import InputError
 from natscene.scatter.compose import DEFAULT_GROUND_ALBEDO, population
 from natscene.scatter.phase import hg
 

@@ -37,7 +37,8 @@ from pathlib import Path
 
 import numpy as np
 
-from natscene.io import InputError, read_exr, read_yaml, write_exr, write_yaml
+from natscene.errors import InputError
+from natscene.io import read_exr, read_yaml, write_exr, write_yaml
 
 TRANSPORTS = ("all_orders", "dobashi")
 SKY_CHANNELS = ("R", "G", "B", "ground")

@@ -1,13 +1,17 @@
-"""Sky extraction from a cloud photograph (Dobashi et al. 2012 §4.1).
+"""The sky: extracted from a cloud photograph (Dobashi et al. 2012 §4.1), or the analytic daylight sky.
 
 - :mod:`natscene.sky.segmentation`: cloud / sky / neither classification by chroma (Dobashi 2010 as
   summarised in §4.1), optional hand-painted mask, morphology, soft cloud alpha;
-- :mod:`natscene.sky.laplace`: the sky behind the clouds, ∇²L_sky = 0 with the sky as Dirichlet boundary
-  (Pérez et al. 2003), exact sparse direct solve;
+- :mod:`natscene.sky.laplace`: the sky behind the clouds L_sky, ∇²L_sky = 0 with the sky as Dirichlet boundary
+  (Pérez et al. 2003), solved exactly by multigrid-preconditioned CG (:mod:`natscene.sky.multigrid`, the
+  default) or a sparse direct factorisation;
 - :mod:`natscene.sky.sun_colour`: the colour of the light incident on the clouds c_in (Otsu split of the
   cloud pixels' grey levels, mean colour of the brighter class);
+- :mod:`natscene.sky.plausibility`: the checks that refuse a photo that is not a cloud photo;
 - :mod:`natscene.sky.resample`: area-averaged products at the fit resolutions;
-- :mod:`natscene.sky.extract`: the whole stage on one photo.
+- :mod:`natscene.sky.extract`: the whole stage on one photo;
+- :mod:`natscene.sky.daylight`: the Preetham et al. (1999) daylight sky and a shot's sky (the sky behind shot
+  frames, the dome that lights the clouds and the composite's set).
 """
 from natscene.sky.extract import SkyResult, SkySettings, extract_sky
 

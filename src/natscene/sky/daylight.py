@@ -14,8 +14,13 @@ Scale: one constant, so that the zenith luminance at ``reference_elevation`` of 
 ``zenith_luminance`` (photo-relative linear units, like the fitted L_sky); the sky therefore darkens and
 reddens by itself as the sun sets. The model is defined for the sun at or above the horizon and view
 directions above it: sun elevations are clamped to >= 0 and view elevations to >= ``min_view_elevation``
-(the horizon's colour continues below it). Used for the sky behind shot frames
-(:mod:`natscene.keyframes.sky`) and for the sky dome that lights the clouds (:mod:`natscene.scatter.skylight`).
+(the horizon's colour continues below it).
+
+:func:`shot_sky_radiance` is a shot's sky (config ``shots.<name>.sky``: this model, or a constant colour) toward
+any directions: the one place that reads those settings, used for the sky behind shot frames
+(:func:`natscene.keyframes.sky.sky_image`) and the sky that lights a composite's set
+(:func:`natscene.composite.sky_dome.shot_sky`). The sky dome that lights the clouds in the transport
+(:mod:`natscene.scatter.skylight`) uses :func:`preetham_rgb` too.
 """
 from __future__ import annotations
 
@@ -97,5 +102,19 @@ def preetham_rgb(dirs, sun_dir, turbidity: float = 3.0, zenith_luminance: float 
     Z = (1.0 - x - y) / y * Y
     rgb = xyz_to_linear_srgb(np.stack([X, Y, Z], axis=-1))
     return np.clip(rgb, 0.0, None).astype(np.float32)
+
+
+def shot_sky_radiance(settings: dict, dirs, sun_dir) -> np.ndarray:
+    """Linear sRGB radiance (..., 3), float32, of a shot's sky toward unit ``dirs`` (..., 3) for the sun toward
+    ``sun_dir``; ``settings``: a validated ``shots.<name>.sky`` (``model: preetham``: :func:`preetham_rgb` with its
+    turbidity, zenith_luminance, reference_elevation, min_view_elevation; ``model: constant``: ``color``)."""
+    model = settings.get("model", "preetham")
+    if model == "preetham":
+        return preetham_rgb(dirs, sun_dir, settings.get("turbidity", 3.0), settings.get("zenith_luminance", 0.3),
+                            settings.get("reference_elevation", 35.0), settings.get("min_view_elevation", 1.0))
+    if model == "constant":
+        c = np.asarray(settings.get("color", [0.3, 0.45, 0.8]), np.float32)
+        return np.broadcast_to(c, np.shape(dirs)[:-1] + (3,)).copy()
+    raise ValueError(f"unknown sky model {model!r}")
 
 

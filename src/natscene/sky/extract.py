@@ -16,7 +16,8 @@ from dataclasses import asdict, dataclass, field
 import cv2
 import numpy as np
 
-from natscene.io import InputError
+from natscene.config import settings_from_section
+from natscene.errors import InputError
 from natscene.sky.laplace import solve_laplace
 from natscene.sky.plausibility import PlausibilityLimits, findings, measure, negative_values
 from natscene.sky.segmentation import AUTO, CLOUD, NEITHER, SKY, check_colour_photo, classify, soft_alpha
@@ -37,15 +38,6 @@ class SkySettings:
     overcast_cloud_fraction: float = 0.8
     checks: dict = field(default_factory=dict)  # PlausibilityLimits overrides (sky.checks)
     accept_unusual: bool = False  # photos.<name>.accept_unusual: implausible findings warn instead of stopping
-
-    @classmethod
-    def from_config(cls, *sections: dict) -> "SkySettings":
-        """Settings from config dicts, later ones overriding earlier (unknown keys ignored)."""
-        names = set(cls.__dataclass_fields__)
-        kw = {}
-        for s in sections:
-            kw.update({k: v for k, v in (s or {}).items() if k in names})
-        return cls(**kw)
 
 
 @dataclass
@@ -139,7 +131,7 @@ def extract_sky(photo: np.ndarray, settings: SkySettings | None = None,
     sun = sun_colour(photo, labels, st.clip_level, st.grey_chroma, st.overcast_cloud_fraction)
     hand_labelled = hand_mask is not None and not (np.asarray(hand_mask) == AUTO).any()
     measured = measure(photo, labels, sun.c_in)
-    found = findings(measured, PlausibilityLimits.from_config(st.checks), hand_labelled)
+    found = findings(measured, settings_from_section(PlausibilityLimits, st.checks, "sky.checks"), hand_labelled)
     if found and not st.accept_unusual:
         raise InputError(
             f"{name}: this does not look like a daytime cloud photo the sky stage can use:\n  - "

@@ -21,7 +21,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.linalg import splu
 
-from natscene.io import InputError
+from natscene.errors import InputError
 from natscene.sky.multigrid import solve_pcg
 
 

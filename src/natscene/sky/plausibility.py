@@ -36,7 +36,7 @@ unless ``photos.<name>.accept_unusual: true``: then the findings become warnings
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -55,12 +55,6 @@ class PlausibilityLimits:
     sky_hue_deg: tuple = (180.0, 330.0)
     sun_cct_k: tuple = (2000.0, 15000.0)
     max_sun_duv: float = 0.02
-
-    @classmethod
-    def from_config(cls, section: dict | None) -> "PlausibilityLimits":
-        names = {f.name for f in fields(cls)}
-        kw = {k: (tuple(v) if isinstance(v, list) else v) for k, v in (section or {}).items() if k in names}
-        return cls(**kw)
 
 
 def negative_values(photo: np.ndarray) -> dict | None:

@@ -27,7 +27,7 @@ import cv2
 import numpy as np
 
 from natscene.color import linear_srgb_to_lab
-from natscene.io import InputError
+from natscene.errors import InputError
 
 SKY, CLOUD, NEITHER = 0, 1, 2
 LABEL_NAMES = {SKY: "sky", CLOUD: "cloud", NEITHER: "neither"}

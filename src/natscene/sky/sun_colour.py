@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from natscene.color import linear_srgb_to_lab, luminance
-from natscene.io import InputError
+from natscene.errors import InputError
 from natscene.sky.segmentation import CLOUD, SKY, otsu_threshold
 
 

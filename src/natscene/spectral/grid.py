@@ -1,6 +1,9 @@
-"""Wavelength grid and spectrum -> CIE XYZ -> linear sRGB (Dong 2007 §2.4, the colour-transformation stage).
+"""Wavelength grid, CIE tables on it, and spectrum -> CIE XYZ -> linear sRGB (Dong 2007 §2.4, the
+colour-transformation stage). The one home of the wavelength grid and of the colour-matching functions and
+illuminant tables (colour-science's) for every stage that works with spectra (compositing, pigments, leaves).
 
-Spectra are sampled on a regular grid (default 380-780 nm every 5 nm, 81 samples). Tristimulus values are
+Spectra are sampled on a regular grid (default 380-780 nm every 5 nm, 81 samples; the pigment stages use
+400-770 nm, where PROSPECT-D has data). Tristimulus values are
 ``X_k = kappa * sum_i S(lambda_i) xbar_k(lambda_i) dlambda`` with the CIE 1931 2° colour-matching functions
 (Dong §2.4). ``kappa`` is fixed once for the whole project: it makes the CIE D65 SPD (as tabulated, 100 at
 560 nm) integrate to Y = 1, so a *radiance* spectrum equal to D65 is the linear-sRGB white (1, 1, 1) that the
@@ -16,6 +19,7 @@ import colour
 import numpy as np
 
 from natscene.color import xyz_to_linear_srgb
+from natscene.errors import InputError
 
 CMFS_NAME = "CIE 1931 2 Degree Standard Observer"
 
@@ -66,16 +70,24 @@ def cmfs(grid: WavelengthGrid = DEFAULT_GRID) -> np.ndarray:
     return _cmfs(grid).copy()
 
 
-@lru_cache(maxsize=8)
-def _d65_table(grid: WavelengthGrid) -> np.ndarray:
-    sd = colour.SDS_ILLUMINANTS["D65"].copy().align(grid.shape)
+@lru_cache(maxsize=16)
+def _illuminant(name: str, grid: WavelengthGrid) -> np.ndarray:
+    if name not in colour.SDS_ILLUMINANTS:
+        raise InputError(f"unknown illuminant '{name}'; use a colour-science name such as D65, D50, A")
+    sd = colour.SDS_ILLUMINANTS[name].copy().align(grid.shape)
     return np.asarray(sd.values, np.float64)
+
+
+def illuminant_table(name: str = "D65", grid: WavelengthGrid = DEFAULT_GRID) -> np.ndarray:
+    """A CIE illuminant's SPD as colour-science tabulates it (D65: 100 at 560 nm) on the grid, shape (N,).
+    The array is shared (cached): do not modify it."""
+    return _illuminant(name, grid)
 
 
 @lru_cache(maxsize=8)
 def kappa(grid: WavelengthGrid = DEFAULT_GRID) -> float:
     """The constant of Dong's X_k = kappa ∫ I xbar_k dlambda: D65 (tabulated) integrates to Y = 1."""
-    return float(1.0 / (_d65_table(grid) @ _cmfs(grid)[:, 1] * grid.step))
+    return float(1.0 / (illuminant_table("D65", grid) @ _cmfs(grid)[:, 1] * grid.step))
 
 
 def integration_matrix(grid: WavelengthGrid = DEFAULT_GRID) -> np.ndarray:
@@ -112,5 +124,5 @@ def spectrum_to_rgb_matrix(grid: WavelengthGrid = DEFAULT_GRID) -> np.ndarray:
 def reflectance_to_rgb(reflectance: np.ndarray, illuminant: np.ndarray | None = None,
                        grid: WavelengthGrid = DEFAULT_GRID) -> np.ndarray:
     """Linear sRGB of reflectance spectra (..., N) under an illuminant SPD (default D65)."""
-    illum = _d65_table(grid) if illuminant is None else np.asarray(illuminant, np.float64)
+    illum = illuminant_table("D65", grid) if illuminant is None else np.asarray(illuminant, np.float64)
     return spectrum_to_rgb(np.asarray(reflectance, np.float64) * illum, grid)

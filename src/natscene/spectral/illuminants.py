@@ -13,12 +13,12 @@ import colour
 import numpy as np
 
 from natscene.color import linear_srgb_to_xyz
-from natscene.spectral.grid import DEFAULT_GRID, WavelengthGrid, _d65_table, kappa, spectrum_to_rgb
+from natscene.spectral.grid import DEFAULT_GRID, WavelengthGrid, illuminant_table, kappa, spectrum_to_rgb
 
 
 def d65(grid: WavelengthGrid = DEFAULT_GRID) -> np.ndarray:
     """D65 radiance on the grid whose colour is linear sRGB (1, 1, 1) (Y = 1)."""
-    return _d65_table(grid).copy()
+    return illuminant_table("D65", grid).copy()
 
 
 def daylight(cct: float, grid: WavelengthGrid = DEFAULT_GRID) -> np.ndarray:

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from natscene.io import InputError
+from natscene.errors import InputError
 
 
 def ior_directory() -> Path:

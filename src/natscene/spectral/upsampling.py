@@ -19,7 +19,7 @@ from functools import lru_cache
 import colour
 import numpy as np
 
-from natscene.spectral.grid import DEFAULT_GRID, WavelengthGrid, _d65_table
+from natscene.spectral.grid import DEFAULT_GRID, WavelengthGrid, illuminant_table
 
 METHODS = ("mallett2019", "smits1999")
 
@@ -89,5 +89,5 @@ def rgb_to_radiance(rgb, grid: WavelengthGrid = DEFAULT_GRID, method: str = "mal
     a = np.asarray(rgb, np.float64)
     if method == "smits1999":
         scale = np.maximum(a.max(axis=-1, keepdims=True), 1e-30)
-        return _smits(a / scale, grid) * scale * _d65_table(grid)
-    return rgb_to_reflectance(a, grid, method) * _d65_table(grid)
+        return _smits(a / scale, grid) * scale * illuminant_table("D65", grid)
+    return rgb_to_reflectance(a, grid, method) * illuminant_table("D65", grid)

@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from natscene.color import linear_to_srgb, srgb_to_linear
-from natscene.tiles.genetic import GAParams, GAResult, MatchCost, quarter_layout, run_ga
+from natscene.tiles.tile_ga import GAParams, GAResult, MatchCost, quarter_layout, run_tile_ga
 from natscene.tiles.blend import poisson_blend
 from natscene.tiles.graphcut import axis_weights, build_tile, constraint_masks, intermediate_offsets, render
 from natscene.tiles.omega import TileSet
@@ -86,7 +86,7 @@ def construct(example_linear: np.ndarray, ts: TileSet, tile_size: int, params: G
     enc = linear_to_srgb(lin)
     p = params or GAParams()
     cost = MatchCost(enc, tile_size, p.metric, p.mu)
-    ga = run_ga(enc, ts, tile_size, p, seed=seed, cost=cost)
+    ga = run_tile_ga(enc, ts, tile_size, p, seed=seed, cost=cost)
     s = int(tile_size)
     color_cost = cost if p.metric == "color" else MatchCost(enc, s)
     inter_lin = intermediate_tiles(lin, ga.genes, ts, s)

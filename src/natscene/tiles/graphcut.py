@@ -76,7 +76,7 @@ def constraint_masks(s: int, margin: float = 1.0, core: float = 2.0, region: str
 def intermediate_offsets(genes: np.ndarray, corners, s: int) -> np.ndarray:
     """(s, s, 2) source offsets of the intermediate tile with corner colours ``corners`` (TL, TR, BL, BR
     indices into ``genes``, the patches' top-left (y, x) in the example)."""
-    from natscene.tiles.genetic import quarter_layout
+    from natscene.tiles.tile_ga import quarter_layout
     h = s // 2
     off = np.empty((s, s, 2), np.int64)
     for q, ((sy, sx), (oy, ox)) in enumerate(quarter_layout(s)):

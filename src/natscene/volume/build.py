@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from natscene.io import InputError
+from natscene.errors import InputError
 from natscene.volume.grid import Volume, import_grid, mean_optical_depth, placement
 from natscene.volume.procedural import KINDS, generate, statistics
 

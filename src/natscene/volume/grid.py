@@ -18,7 +18,8 @@ from pathlib import Path
 
 import numpy as np
 
-from natscene.io import InputError, atomic_path, read_yaml
+from natscene.errors import InputError
+from natscene.io import atomic_path, read_yaml
 
 MAX_RES = 1024
 

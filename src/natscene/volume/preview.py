@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from natscene.phase import hg
+
 SKY = np.array([0.18, 0.32, 0.62], np.float32)  # linear sRGB of a mid-blue sky
 
 
@@ -72,10 +74,6 @@ LOOK_SKY = np.array([0.16, 0.27, 0.55], np.float32)    # sky radiance (linear RG
 LOOK_SUN = np.array([3.2, 3.05, 2.8], np.float32)      # sun irradiance (linear RGB)
 
 
-def _hg(g: float, cos_t: float) -> float:
-    return (1 - g * g) / (4 * np.pi * (1 + g * g - 2 * g * cos_t) ** 1.5)
-
-
 def rendered_look(volume, sigma_t: float = LOOK_SIGMA_T, octaves: int = 8, a: float = 0.5, b: float = 0.7,
                   c: float = 0.5, g: float = 0.8, albedo: float = 0.999) -> np.ndarray:
     """Linear RGB [ny, nx, 3] of the cloud seen along +z (orthographic, y up), sun from the side (+x, level).
@@ -95,7 +93,7 @@ def rendered_look(volume, sigma_t: float = LOOK_SIGMA_T, octaves: int = 8, a: fl
     w = (mu * np.float32(albedo)) * np.exp(-tau_v)                         # scattering seen by the camera
     sun = np.zeros(d.shape[1:], np.float32)
     for i in range(octaves):
-        sun += np.float32(b ** i * _hg(c ** i * g, 0.0)) * (w * np.exp(-np.float32(a ** i) * tau_l)).sum(axis=0)
+        sun += np.float32(b ** i * hg(0.0, c ** i * g)) * (w * np.exp(-np.float32(a ** i) * tau_l)).sum(axis=0)
     amb = (w * np.exp(-0.5 * tau_t)).sum(axis=0)
     t = np.exp(-mu.sum(axis=0))
     img = sun[..., None] * LOOK_SUN + amb[..., None] * LOOK_SKY * np.float32(0.9) + t[..., None] * LOOK_SKY

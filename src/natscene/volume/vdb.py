@@ -26,7 +26,8 @@ from pathlib import Path
 
 import numpy as np
 
-from natscene.io import InputError, atomic_path
+from natscene.errors import InputError
+from natscene.io import atomic_path
 
 WORKER = Path(__file__).with_name("vdb_worker.py")
 

@@ -1,14 +1,13 @@
-"""Demo views for the Mie shading (Reimschuessel 2011, Ch. 4, Fig. 11): one sun, three cameras placed
-around the cloud so that the same point-cloud solution is reused (the thesis' view independence):
+"""Cameras that frame the effects of the Mie shading (Reimschuessel 2011, Ch. 4, Fig. 11; the rule
+``mie_render``'s shots, config ``mie.demo``): one sun, cameras placed around the cloud so that the same
+point-cloud solution is reused (the thesis' view independence). :func:`effect_camera`:
 
 - ``glory``: camera between the sun and the cloud, the cloud centre at the antisolar point (θ = 180°);
 - ``fogbow``: the cloud centre ``fogbow_angle`` degrees from the antisolar point (θ = 180° - that);
 - ``silver_lining``: camera behind the cloud, the sun ``silver_offset`` degrees from the cloud centre
   (θ near 0°, the forward peak).
 
-Also the R_i picture of Fig. 8 (a slice of the point cloud through the centre, along the light).
-
-Where nature shows these effects (and so where the demo shoots them):
+Where nature shows these effects (and so where the shots look for them):
 
 - glory and fogbow: on the tops of *thin, uniform-droplet* stratocumulus decks and fog banks, with the sun
   behind the observer. The rings need a narrow droplet spectrum (effective variance v_eff ≲ 0.05; at
@@ -26,20 +25,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from natscene.geometry import Camera
+from natscene.geometry import Camera, rotate
 
 SHOTS = ("glory", "fogbow", "silver_lining")
 
 
-def _rotate(v, axis, angle_rad):
-    axis = axis / np.linalg.norm(axis)
-    return (v * np.cos(angle_rad) + np.cross(axis, v) * np.sin(angle_rad)
-            + axis * np.dot(axis, v) * (1 - np.cos(angle_rad)))
-
-
-def demo_camera(shot: str, volume, sun_dir, distance: float = 2.2, fov: float = 32.0, resolution=(480, 360),
-                fogbow_angle: float = 39.0, silver_offset: float = 6.0) -> Camera:
-    """The camera of one demo shot, looking at the centre of the volume's bounding box."""
+def effect_camera(shot: str, volume, sun_dir, distance: float = 2.2, fov: float = 32.0, resolution=(480, 360),
+                  fogbow_angle: float = 39.0, silver_offset: float = 6.0) -> Camera:
+    """The camera of one effect shot (``glory``, ``fogbow``, ``silver_lining``, see the module docstring) on a
+    circle around the volume, looking at the centre of its bounding box."""
     c = (np.asarray(volume.bbox_min, float) + np.asarray(volume.bbox_max, float)) / 2
     s = np.asarray(sun_dir, float) / np.linalg.norm(sun_dir)
     side = np.cross(s, [0.0, 1.0, 0.0])
@@ -48,11 +42,11 @@ def demo_camera(shot: str, volume, sun_dir, distance: float = 2.2, fov: float = 
     if shot == "glory":
         to_cam = s
     elif shot == "fogbow":
-        to_cam = _rotate(s, side, np.radians(fogbow_angle))   # away from the antisolar direction
+        to_cam = rotate(s, side, np.radians(fogbow_angle))   # away from the antisolar direction
     elif shot == "silver_lining":
-        to_cam = -_rotate(s, side, np.radians(silver_offset))
+        to_cam = -rotate(s, side, np.radians(silver_offset))
     else:
-        raise ValueError(f"unknown demo shot '{shot}' (one of {SHOTS})")
+        raise ValueError(f"unknown effect shot '{shot}' (one of {SHOTS})")
     pos = c + distance * to_cam
     up = np.array([0.0, 1.0, 0.0]) if abs(to_cam[1]) < 0.99 else np.array([0.0, 0.0, 1.0])
     w, h = resolution
@@ -115,7 +109,7 @@ def deck_camera(shot: str, deck, sun_dir, distance: float = 1.5, fov: float = 10
         # sideways (about the axis in the sun's vertical plane): the view still looks down at the deck,
         # at a shallower angle than the antisolar point, so the bow's side arc lies on the deck top
         axis = np.array([0.0, 1.0, 0.0]) - s[1] * s
-        to_cam = _rotate(s, axis / np.linalg.norm(axis), np.radians(angle))
+        to_cam = rotate(s, axis / np.linalg.norm(axis), np.radians(angle))
     elif shot != "glory":
         raise ValueError(f"deck_camera: shot must be 'glory' or 'fogbow', got '{shot}'")
     pos = c + distance * to_cam
@@ -177,62 +171,3 @@ def scattering_angle_at_centre(camera: Camera, sun_dir) -> float:
     to_cam = to_cam / np.linalg.norm(to_cam)
     w = -np.asarray(sun_dir, float) / np.linalg.norm(sun_dir)
     return float(np.degrees(np.arccos(np.clip(np.dot(w, to_cam), -1, 1))))
-
-
-def ratio_slice(solution) -> np.ndarray:
-    """Fig. 8: R_i on the lattice slice through the middle containing the light direction (rows: along
-    the light, sun at the top; columns: across), NaN where there is no point. Returns (nc, na)."""
-    p = solution.points
-    nc, nb, na = p.shape
-    b_mid = int(np.median(p.index[:, 1]))
-    img = np.full((nc, na), np.nan, np.float32)
-    sel = p.index[:, 1] == b_mid
-    img[p.index[sel, 0], p.index[sel, 2]] = solution.ratio[sel]
-    return img
-
-
-def ratio_image(solution, scale: int = 4) -> np.ndarray:
-    """Fig. 8 as a grey image (dark = isotropic, light = Mie), blue where there is no point."""
-    r = ratio_slice(solution)
-    rgb = np.where(np.isnan(r)[..., None], np.array([0.05, 0.08, 0.2], np.float32), np.nan_to_num(r)[..., None])
-    return np.repeat(np.repeat(rgb, scale, 0), scale, 1).astype(np.float32)
-
-
-# ------------------------------------------------------------------------------------ measurements
-def angular_profile(img: np.ndarray, camera: Camera, direction, max_deg: float = 4.0, step_deg: float = 0.1):
-    """Azimuthal mean of the RGB mean of ``img`` in rings of width ``step_deg`` around ``direction`` (a
-    unit vector, e.g. the antisolar direction -sun): -> (ring centres (deg), profile); NaN for empty rings."""
-    d = camera.ray_directions()
-    u = np.asarray(direction, float) / np.linalg.norm(direction)
-    ang = np.degrees(np.arccos(np.clip(d @ u, -1, 1)))
-    edges = np.arange(0.0, max_deg + 1e-9, step_deg)
-    k = np.digitize(ang, edges) - 1
-    y = np.asarray(img, np.float64).mean(axis=-1)
-    ok = (k >= 0) & (k < len(edges) - 1)
-    s = np.bincount(k[ok], y[ok], minlength=len(edges) - 1)
-    n = np.bincount(k[ok], minlength=len(edges) - 1)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        return (edges[:-1] + edges[1:]) / 2, s / n
-
-
-def ring_contrast(centres: np.ndarray, profile: np.ndarray):
-    """The first bright ring of a radial profile (around the antisolar point): the first local minimum
-    outward from the centre, then the maximum beyond it -> (ring angle (deg), ring max / that minimum).
-    A profile with no local minimum (monotone) gives (NaN, 1.0)."""
-    p = np.asarray(profile, np.float64)
-    ok = np.isfinite(p)
-    c, p = np.asarray(centres)[ok], p[ok]
-    for i in range(1, len(p) - 1):
-        if p[i] < p[i - 1] and p[i] <= p[i + 1]:
-            j = i + int(np.argmax(p[i:]))
-            if j == i:
-                break
-            return float(c[j]), float(p[j] / p[i])
-    return float("nan"), 1.0
-
-
-def rim_peak(img: np.ndarray, fraction: float = 0.001) -> float:
-    """Brightness of the brightest ``fraction`` of pixels (mean of their RGB means): the silver-lining
-    rim's peak."""
-    y = np.sort(np.asarray(img, np.float64).mean(axis=-1).ravel())
-    return float(y[-max(1, int(round(fraction * y.size))):].mean())

@@ -1,4 +1,5 @@
-"""Sample-patch selection by genetic algorithm (Dong 2007 §5.4.2, Eqs. 5.1-5.6).
+"""The ω-tile GA (:func:`run_tile_ga`): sample-patch selection by genetic algorithm (Dong 2007 §5.4.2,
+Eqs. 5.1-5.6).
 
 A chromosome holds the n sample-patch coordinates (one gene per colour square, ``(y, x)`` of the patch's
 top-left corner in the example). Its evaluation (Eqs. 5.1-5.4) over the m intermediate tiles of the set:
@@ -52,12 +53,7 @@ class GAParams:
     metric: str = "color"
     mu: float = 10.0
 
-    @classmethod
-    def from_dict(cls, d: dict | None) -> "GAParams":
-        d = dict(d or {})
-        if "lambda" in d:
-            d["lam"] = d.pop("lambda")
-        return cls(**d)
+    CONFIG_NAMES = {"lambda": "lam"}  # config name -> field (``lambda`` is a Python keyword)
 
 
 def quarter_layout(s: int):
@@ -179,7 +175,7 @@ class GAResult:
 
 
 def min_patch_positions(n: int) -> int:
-    """Distinct patch positions the GA of :func:`run_ga` needs for a set of ``n`` sample patches: a mutation
+    """Distinct patch positions the GA of :func:`run_tile_ga` needs for a set of ``n`` sample patches: a mutation
     replaces up to all ``n`` genes by new ones distinct from the ``n`` it had, so ``2 n``."""
     return 2 * int(n)
 
@@ -216,7 +212,7 @@ def random_genes(rng, n: int, PH: int, PW: int, exclude=()) -> np.ndarray:
     return np.array(out, np.int64).reshape(n, 2)
 
 
-def run_ga(example: np.ndarray, ts: TileSet, tile_size: int, params: GAParams | None = None,
+def run_tile_ga(example: np.ndarray, ts: TileSet, tile_size: int, params: GAParams | None = None,
            seed: int = 0, cost: MatchCost | None = None) -> GAResult:
     """Select the n sample patches of ``ts`` from ``example`` by the GA of §5.4.2."""
     p = params or GAParams()

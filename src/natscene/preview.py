@@ -1,0 +1,44 @@
+"""Text labels on preview images (contact sheets, pattern sheets): the one label painter of the project.
+
+:func:`label` paints a line of text with OpenCV's Hershey simplex font (anti-aliased) on an 8-bit RGB image, in
+one of three looks:
+
+- ``"outlined"`` (default): white text with a black outline 2 px wider than the stroke, readable on any tile;
+  the font scale grows with the image height, max(0.4, H / 600), the stroke with the scale (the fit's contact
+  sheet, :mod:`natscene.fit.report`);
+- ``"table"``: thin yellow text, font scale max(0.3, W / 640) from the image width (the contact sheet of the
+  precomputed tables, :mod:`natscene.scatter.contact`);
+- ``"caption"``: thin white text at scale 0.5, vertically centred, for a caption cell beside a row (the
+  pattern sheet, ``scripts/pattern_sheet.py``).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+STYLES = ("outlined", "table", "caption")
+WHITE, BLACK, YELLOW = (255, 255, 255), (0, 0, 0), (255, 255, 0)
+
+
+def label(image: np.ndarray, text: str, style: str = "outlined") -> np.ndarray:
+    """``image`` (H, W, 3) uint8 with ``text`` painted near its top-left corner (``caption``: its left middle).
+
+    Painted in place when ``image`` is C-contiguous (else on a contiguous copy); the painted array is returned."""
+    import cv2
+
+    if style not in STYLES:
+        raise ValueError(f"unknown label style {style!r} (one of {', '.join(STYLES)})")
+    out = np.ascontiguousarray(image)
+    h, w = out.shape[:2]
+    font, aa = cv2.FONT_HERSHEY_SIMPLEX, cv2.LINE_AA
+    if style == "outlined":
+        scale = max(0.4, h / 600.0)
+        thick = max(1, int(round(2 * scale)))
+        org = (5, int(24 * scale) + 5)
+        cv2.putText(out, text, org, font, scale, BLACK, thick + 2, aa)
+        cv2.putText(out, text, org, font, scale, WHITE, thick, aa)
+    elif style == "table":
+        scale = max(0.3, w / 640)
+        cv2.putText(out, text, (3, int(28 * scale)), font, scale, YELLOW, 1, aa)
+    else:
+        cv2.putText(out, text, (6, h // 2 + 5), font, 0.5, WHITE, 1, aa)
+    return out
