@@ -11,7 +11,7 @@ local SLURM, checked against a local run of the same workflow.
 4. prints ``sacct`` for the SLURM run's jobs; stops the cluster if it started it.
 
 T = min(2, CPUs of the node): the smoke config's ``threads``; Dr.Jit renders the same bytes only at the
-same thread count (DESIGN.md, "Mitsuba facts"). Exit status 0 when every check holds.
+same thread count (docs/architecture.md, "Mitsuba facts"). Exit status 0 when every check holds.
 """
 from __future__ import annotations
 

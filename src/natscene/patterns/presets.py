@@ -31,7 +31,7 @@ REFERENCE_HEIGHT = 528
 #: (REFERENCE_HEIGHT / height)^2), the hormone state held at the vein root (multiples of the steady state a*, b*)
 #: and the reach of the non-adjacent vein links of Eq. 3.1c (0 = adjacent cells only; 10 = every dyadic link
 #: along a vein, i.e. the veins conduct like wires). Found by a search on a 1/3-scale petunia grid scored on the
-#: radial profile and the vein/inter-vein contrast of the pigment A map (see README "Known limits"): with the
+#: radial profile and the vein/inter-vein contrast of the pigment A map (docs/stages/patterns.md, Limits): with the
 #: Table 3.3 values alone (same constants for all four rows) the four shapes do not separate, because none of the
 #: rows is Turing-unstable (Schnakenberg needs D_B / D_A > 3 + 2 sqrt(2) for any K_A, K_B, beta).
 FIG_3_3_STATE = {
