@@ -111,7 +111,7 @@ def allowed(node: dict, root: dict, type_name: str | None = None) -> str:
 def _cell(text: str) -> str:
     """One table cell: one line, pipes escaped, and <...> outside code spans kept visible (not taken as HTML)."""
     parts = " ".join(str(text).split()).replace("|", "\\|").split("`")
-    parts[::2] = [p.replace("<", "&lt;").replace(">", "&gt;") for p in parts[::2]]
+    parts[::2] = [p.replace("<", "&lt;") for p in parts[::2]]
     return "`".join(parts)
 
 
