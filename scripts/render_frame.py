@@ -50,7 +50,7 @@ def main(snakemake, log):
     attrs = {"shot": name, "frame": int(state["frame"]), "t": float(state["t"]), "keyframes": state["keyframes"],
              "params": state["params"], "sun": state["sun"], "camera": cam, "resolution": [int(w), int(h)],
              "fov_axis": "y", "render": dict(r), "sky": dict(shot["sky"]), "phase": shot["phase"],
-             "denoise": shot["denoise"], "timings_s": {k: round(v, 3) for k, v in out["timings"].items()}}
+             "denoise": shot["denoise"]}   # no timings: a rerun must write the same bytes (they go to the log)
     if mie is not None:
         attrs.update(mie_sun=par.mie_sun, mie_table=shot["mie_table"], mie_solver_sigma_t=par.mie_sigma_t)
     f = out["features"]

@@ -14,14 +14,22 @@ EmberGen and the Disney cloud data set use), through its Python binding. Which o
 ``tools/setup.sh`` installs ``python3-openvdb`` with apt-get when neither is found. Values are written with
 tolerance 0 (lossless float32; zero voxels stay inactive background) and the transform is linear and
 axis-aligned: the centre of voxel (0, 0, 0) at ``bbox_min + voxel / 2``, world metres, y up.
+
+Reproducible bytes: the library stamps every file it writes with a fresh random UUID (``Archive::writeHeader``;
+readers use it only to tell files apart, e.g. for delayed loading). :func:`write_vdb` replaces it with a
+name-based UUID (RFC 4122 version 5) of the file's other bytes, so the same grid gives the same file on every
+run and two different grids still get different UUIDs.
 """
 from __future__ import annotations
 
 import functools
+import hashlib
 import json
 import os
+import struct
 import subprocess
 import tempfile
+import uuid
 from pathlib import Path
 
 import numpy as np
@@ -30,6 +38,13 @@ from natscene.errors import InputError
 from natscene.io import atomic_path
 
 WORKER = Path(__file__).with_name("vdb_worker.py")
+
+# The header of an OpenVDB file of format >= 222 (OpenVDB io/Archive.cc, Archive::writeHeader): int64 magic,
+# uint32 file format version, uint32 library major and minor version, char hasGridOffsets, then the file's UUID
+# as 36 ASCII characters (the per-file compression flag before it was dropped at format 222).
+VDB_MAGIC = 0x56444220
+UUID_OFFSET, UUID_CHARS = 21, 36
+UUID_NAMESPACE = uuid.uuid5(uuid.NAMESPACE_URL, "natscene:openvdb-file")
 
 
 @functools.lru_cache(maxsize=1)
@@ -93,7 +108,8 @@ def list_grids(path) -> list[tuple[str, str]]:
 
 def write_vdb(path, density: np.ndarray, bbox_min, bbox_max, grid: str = "density", metadata: dict | None = None):
     """Write a float32 grid ``[nz, ny, nx]`` placed in the box [bbox_min, bbox_max] (world metres) as ``path``
-    (atomically), one float fog-volume grid named ``grid`` with ``metadata`` (str/float/int values)."""
+    (atomically), one float fog-volume grid named ``grid`` with ``metadata`` (str/float/int values); the same
+    arguments give the same bytes (:func:`content_uuid`)."""
     d = np.ascontiguousarray(density, np.float32)
     nz, ny, nx = d.shape
     lo, hi = np.asarray(bbox_min, np.float64), np.asarray(bbox_max, np.float64)
@@ -113,6 +129,30 @@ def write_vdb(path, density: np.ndarray, bbox_min, bbox_max, grid: str = "densit
                 spec["metadata"]["natscene:shape_xyz"] = list(spec["metadata"]["natscene:shape_xyz"])
                 (Path(td) / "spec.json").write_text(json.dumps(spec))
                 _run(["write", Path(td) / "g.npy", tmp, Path(td) / "spec.json"])
+        content_uuid(tmp)
+
+
+def content_uuid(path) -> str:
+    """Replace the random UUID in the header of the OpenVDB file ``path`` (in place) by the version-5 UUID of
+    the SHA-256 of the file's other bytes; returns the new UUID. Raises RuntimeError for a file whose header is
+    not the one this module writes (OpenVDB file format >= 222, a 36-character UUID at byte 21)."""
+    path = Path(path)
+    data = bytearray(path.read_bytes())
+    end = UUID_OFFSET + UUID_CHARS
+    if len(data) < end:
+        raise RuntimeError(f"{path}: too short for an OpenVDB header ({len(data)} bytes)")
+    magic, fmt = struct.unpack_from("<qI", data, 0)
+    if magic != VDB_MAGIC or fmt < 222:
+        raise RuntimeError(f"{path}: not an OpenVDB file of format >= 222 (magic {magic:#x}, format {fmt})")
+    try:
+        uuid.UUID(data[UUID_OFFSET:end].decode("ascii"))
+    except (UnicodeDecodeError, ValueError) as e:
+        raise RuntimeError(f"{path}: no UUID string at byte {UUID_OFFSET} of the header") from e
+    digest = hashlib.sha256(bytes(data[:UUID_OFFSET]) + bytes(data[end:])).hexdigest()
+    new = str(uuid.uuid5(UUID_NAMESPACE, digest))
+    data[UUID_OFFSET:end] = new.encode("ascii")
+    path.write_bytes(bytes(data))
+    return new
 
 
 def _grid_list_text(grids) -> str:
