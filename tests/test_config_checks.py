@@ -227,3 +227,47 @@ def test_declared_memory_covers_every_measured_peak():
         rules |= set(re.findall(r'estimated_mem_mb\("(\w+)"\)', smk.read_text()))
     assert rules <= set(MODEL), rules - set(MODEL)
 
+
+def test_mie_jobs_are_sized_by_the_volumes_they_read(smoke):
+    """The Mie demo's deck is the volume `mie.demo.deck` names: its point_scatter job and the glory and fogbow
+    renders (cloud: deck) grow with that volume's resolution, the silver lining (cloud: volume) with the demo
+    volume's; a mie_blend shot plans the point_scatter job of its own volume."""
+    from natscene.resources import job_features, planned_jobs
+    cfg = copy.deepcopy(smoke)
+    deck, demo = cfg["mie"]["demo"]["deck"], cfg["mie"]["demo"]["volume"]
+    assert (deck, demo) == ("deck", "tiny")
+    cfg["volumes"]["deck"]["resolution"] = [640, 40, 640]            # 16.4 M voxels, the tiny cumulus 51 200
+    big = 640 * 40 * 640
+    _, f, keys = job_features("point_scatter", cfg, {"volume": deck}, ROOT)
+    assert f["voxels"] == big and keys["voxels"] == "volumes.deck.resolution"
+    for shot, voxels in (("glory", big), ("fogbow", big), ("silver_lining", 40 * 32 * 40)):
+        _, f, _ = job_features("mie_render", cfg, {"volume": demo, "shot": shot}, ROOT)
+        assert f["voxels"] == voxels, shot
+    declared, key = estimate_mem_mb("point_scatter", cfg, {"volume": deck}, ROOT)
+    assert declared > estimate_mem_mb("point_scatter", smoke, {"volume": deck}, ROOT)[0]
+    assert key == "volumes.deck.resolution"
+    planned = {(r, tuple(sorted(wc.items()))) for r, wc, _ in planned_jobs(cfg)}
+    assert {("point_scatter", (("volume", "deck"),)), ("point_scatter", (("volume", "tiny"),))} <= planned
+    cfg["mie"]["demo"]["volume"] = None                              # no demo: the tiny_mie shot still needs it
+    planned = [(r, wc, e) for r, wc, e in planned_jobs(cfg) if r == "point_scatter"]
+    assert planned == [("point_scatter", {"volume": "tiny"}, "shots.tiny_mie.phase")]
+
+
+def test_composite_memory_follows_its_shot_and_meadow(smoke):
+    """A composite with a shot renders at the shot's resolution (the key to name is the shot's); its textures are
+    the ground, each flower pattern map and each leaf texture (as read and as warped)."""
+    from natscene.resources import job_features
+    cfg = copy.deepcopy(smoke)
+    entry = cfg["composite"]["garden"]
+    _, f, keys = job_features("composite", cfg, {"name": "garden"}, ROOT)
+    w, h = cfg["shots"]["tiny"]["resolution"]
+    assert f["samples"] == w * h * entry["spp"] and keys["samples"] == "shots.tiny.resolution"
+    ground = 256 * 192                                               # tiles/grass/synth_256x192.exr
+    pattern = 64 * 64                                                # patterns.tiny_spot.size
+    leaves = 2 * (48 * 48 + 64 * 64)                                 # leaves.size^2 + texture_size^2, two textures
+    assert f["texture_pixels"] == ground + pattern + leaves
+    cfg["shots"]["tiny"]["resolution"] = [1920, 1080]
+    cfg["patterns"]["tiny_spot"]["size"] = [2048, 2048]
+    _, g, _ = job_features("composite", cfg, {"name": "garden"}, ROOT)
+    assert g["samples"] == 1920 * 1080 * entry["spp"]
+    assert g["texture_pixels"] == ground + 2048 * 2048 + leaves
