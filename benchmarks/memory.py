@@ -69,11 +69,11 @@ def case_configs(tmp: Path) -> dict[str, tuple[dict, list[str]]]:
     c["sky"]["fit_resolutions"] = [[160, 120]]
     c["shots"]["tiny"].update(resolution=[160, 120], frames=2)
     c["shots"]["tiny"]["keyframes"][1]["at"] = 1
-    c["composite"]["garden"].update(resolution=[160, 120], frames=[0], spp=2)
+    c["composite"]["garden"].update(frames=[0], spp=2)  # at the shot's resolution
     c["tiles"]["grass"].update(path="resources/textures/grass_meadow_256.png", tile_size=80, sizes=[[1024, 1024]])
     c["patterns"]["tiny_spot"]["size"] = [256, 256]
     c["leaves"]["size"] = 128
-    c["mie"]["deck"]["resolution"] = 96
+    c["volumes"]["deck"]["resolution"] = [96, 24, 96]
     c["mie"]["demo"]["resolution"] = [160, 120]
     c["photos"]["kite"]["path"] = _big_photo(tmp, 2)
     cases["medium"] = (c, [])
@@ -84,7 +84,7 @@ def case_configs(tmp: Path) -> dict[str, tuple[dict, list[str]]]:
     c["shots"]["tiny"].update(resolution=[320, 240], frames=1, keyframes=[{"at": 0, "fit": None,
         "params": {"L_in": 3.0, "g": 0.8, "sigma_t": 0.5, "beta": 0.99, "L_amb": 0.1, "c_in": [1, 1, 1],
                    "kappa_a": 0.1}, "sun": {"azimuth": 130, "elevation": 35},
-        "camera": {"position": [0.0, 0.25, -2.4], "look_at": [0.0, 0.3, 0.0], "fov": 36}}])
+        "camera": {"position": [0.0, 1.7, -3000.0], "look_at": [0.0, 2200.0, 0.0], "fov": 36}}])
     c["tiles"]["grass"].update(sizes=[[4096, 4096]])
     c["patterns"]["tiny_spot"]["size"] = [549, 528]
     c["photos"]["kite"]["path"] = _big_photo(tmp, 4)
@@ -95,13 +95,22 @@ def case_configs(tmp: Path) -> dict[str, tuple[dict, list[str]]]:
                "tiles/grass/synth_4096x4096.png", "patterns/tiny_spot/preview.png", "sky/kite/preview.png"]
     cases["large"] = (c, targets)
 
+    # the main job's composite: a 640x480 shot frame at 4 spp, a 2048^2 ground, the main meadow (its flowers
+    # all of one 549x528 pattern, its leaves of the smoke dates)
     c = copy.deepcopy(base)
-    c["composite"]["garden"].update(resolution=[640, 480], frames=[0], spp=4)
-    c["shots"]["tiny"].update(frames=1, keyframes=[c["shots"]["tiny"]["keyframes"][1] | {"at": 0}])
+    main = load_yaml_config(ROOT / "config" / "config.yaml")
+    meadow = copy.deepcopy(next(iter(main["composite"].values()))["meadow"])
+    for f in meadow["flowers"]:
+        f["pattern"] = "tiny_spot"
+    meadow["leaves"]["textures"] = copy.deepcopy(base["composite"]["garden"]["meadow"]["leaves"]["textures"])
+    c["composite"]["garden"].update(frames=[0], spp=4, meadow=meadow)
+    c["patterns"]["tiny_spot"]["size"] = [549, 528]
+    c["leaves"]["size"] = main["leaves"]["size"]
+    c["shots"]["tiny"].update(resolution=[640, 480], frames=1,
+                              keyframes=[c["shots"]["tiny"]["keyframes"][1] | {"at": 0}])
     c["shots"]["tiny"]["keyframes"][0]["fit"] = None
     c["shots"]["tiny"]["keyframes"][0]["params"] = {"L_in": 3.0, "g": 0.8, "sigma_t": 0.5, "beta": 0.99,
                                                     "L_amb": 0.1, "c_in": [1, 1, 1], "kappa_a": 0.1}
-    c["composite"]["garden"]["sun"] = {"azimuth": 130, "elevation": 35, "intensity": 3.0}
     c["tiles"]["grass"]["sizes"] = [[2048, 2048]]
     c["composite"]["garden"]["ground"]["texture"] = {"product": "tiles/grass/synth_2048x2048.exr"}
     cases["composite"] = (c, ["composite/garden/0000/final.png", "composite/garden/0000/compare.png"])
@@ -129,10 +138,9 @@ def case_configs(tmp: Path) -> dict[str, tuple[dict, list[str]]]:
     io.write_png(big_ground, np.tile(grass, (16, 16, 1)), exposure=1.0)
     c = copy.deepcopy(base)
     c["recolour"]["tiny_flower"]["photo"] = str(big_flower)
-    c["composite"]["garden"].update(frames=[0], resolution=[320, 240], spp=1, reference=False,
-                                    background={"color": [0.3, 0.45, 0.8]}, leaves=[],
-                                    sun={"azimuth": 130, "elevation": 35, "intensity": 3.0},
-                                    ground={"texture": {"path": str(big_ground)}, "size": 6.0, "repeat": 2.0})
+    c["shots"]["tiny"]["resolution"] = [320, 240]
+    c["composite"]["garden"].update(frames=[0], spp=1, reference=False,
+                                    ground={"texture": {"path": str(big_ground)}, "extent": [6.0, 6.0]})
     cases["big_images"] = (c, ["patterns/recolour/tiny_flower/recoloured.png", "composite/garden/0000/final.png"])
 
     # the main job's sizes: its cumulus and kite view at 256 spp (2 million paths per pass), a 640x480 frame

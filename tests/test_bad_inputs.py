@@ -59,15 +59,20 @@ CONFIG_CASES = {  # stage: (mutation, text that must be in the message, extra en
     "fit: keyframe names no photo": (_mut(["keyframes", "tiny", "photo"], "nope"), "keyframes.tiny.photo", None),
     "precompute: pair names no volume": (_mut(["precompute", "pairs"], [{"volume": "nope", "view": "tiny"}]),
                                          "precompute.pairs[0].volume", None),
-    "precompute: sigma_t above 1": (_mut(["precompute", "sigma_t"], [0.0, 1.0, 2.0]), "precompute.sigma_t", None),
+    "precompute: sigma_t above 1": (_mut(["precompute", "sigma_t"], [0.0, 1.0, 2.0]), "precompute.sigma_t[2]", None),
     "volume: kind file without path": (_mut(["volumes", "tiny"], {"kind": "file"}), "volumes.tiny.path", None),
-    "views: camera at its look-at": (lambda c: c["views"]["tiny"]["camera"].update(look_at=[0.0, 0.25, -2.4]),
+    "views: camera at its look-at": (lambda c: c["views"]["tiny"]["camera"].update(look_at=c["views"]["tiny"]["camera"]
+                                                                                    ["position"]),
                                      "views.tiny.camera", None),
     "views: sun below the horizon": (lambda c: c["views"]["tiny"]["sun"].update(elevation=-3),
                                      "views.tiny.sun.elevation", None),
     "shots: unknown volume": (_mut(["shots", "tiny", "volume"], "nope"), "shots.tiny.volume", None),
-    "composite: product of no stage": (_mut(["composite", "garden", "background"], {"product": "shots/nope/x.exr"}),
-                                       "composite.garden.background.product", None),
+    "composite: shot unknown": (_mut(["composite", "garden", "shot"], "nope"), "composite.garden.shot", None),
+    "composite: product of no stage": (_mut(["composite", "garden", "ground", "texture"], {"product": "shots/nope/x.exr"}),
+                                       "composite.garden.ground.texture.product", None),
+    "composite: flower pattern unknown": (
+        lambda c: c["composite"]["garden"]["meadow"]["flowers"][0].update(pattern="nope"),
+        "composite.garden.meadow.flowers[0].pattern", None),
     "tiles: example missing": (_mut(["tiles", "grass", "path"], "resources/textures/nope.png"), "tiles.grass.path",
                                None),
     "patterns: petal shape missing": (_mut(["patterns", "tiny_spot", "shape"], {"kind": "file", "path": "no.png"}),
@@ -76,8 +81,9 @@ CONFIG_CASES = {  # stage: (mutation, text that must be in the message, extra en
                                 None),
     "mie: demo volume unknown": (_mut(["mie", "demo", "volume"], "nope"), "mie.demo.volume", None),
     "leaves: composite names a date not computed": (
-        lambda c: c["composite"]["garden"]["leaves"][1].update(texture={"product": "leaves/maple/normal/12-01.exr"}),
-        "composite.garden.leaves[1].texture.product", None),
+        lambda c: c["composite"]["garden"]["meadow"]["leaves"]["textures"].__setitem__(
+            1, {"product": "leaves/maple/normal/12-01.exr"}),
+        "composite.garden.meadow.leaves.textures[1].product", None),
     "memory: a 1024^3 volume on a small machine": (_mut(["volumes", "tiny", "resolution"], [1024, 1024, 1024]),
                                                    "volumes.tiny.resolution", {"NATSCENE_MEMORY_MB": "8000"}),
 }

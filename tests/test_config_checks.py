@@ -36,6 +36,14 @@ def _set(path, value):
     return f
 
 
+def _no_shot(**entry):
+    """The smoke composite made a composite without a shot (its own camera, background and sun), with ``entry``."""
+    def f(c):
+        del c["composite"]["garden"]["shot"]
+        c["composite"]["garden"].update(entry)
+    return f
+
+
 CASES = [
     # cross-references
     ("keyframe photo", _set(["keyframes", "tiny", "photo"], "nope"), "keyframes.tiny.photo", "'nope' is not in 'photos'"),
@@ -53,23 +61,38 @@ CASES = [
     ("shot keyframe without fit or params", lambda c: c["shots"]["tiny"]["keyframes"][0].__setitem__("fit", None),
      "shots.tiny.keyframes[0].sun", "needed when the keyframe has no 'fit'"),
     ("mie demo volume", _set(["mie", "demo", "volume"], "nope"), "mie.demo.volume", "not in 'volumes'"),
-    ("composite shot product", _set(["composite", "garden", "background"], {"product": "shots/nope/frames/{frame:04d}.exr"}),
-     "composite.garden.background.product", "not in 'shots'"),
-    ("composite frame past shot", _set(["composite", "garden", "frames"], [0, 5]), "composite.garden.background.product",
-     "past the last frame"),
+    ("composite shot", _set(["composite", "garden", "shot"], "nope"), "composite.garden.shot", "'nope' is not in 'shots'"),
+    ("composite frame past shot", _set(["composite", "garden", "frames"], [0, 5]), "composite.garden.frames",
+     "frames [5] are past the last frame (2) of shot 'tiny'"),
+    ("composite flower pattern", lambda c: c["composite"]["garden"]["meadow"]["flowers"][0].__setitem__("pattern", "nope"),
+     "composite.garden.meadow.flowers[0].pattern", "'nope' is not in 'patterns'"),
     ("composite tiles product", lambda c: c["composite"]["garden"]["ground"].__setitem__(
         "texture", {"product": "tiles/nope/synth_256x192.exr"}), "composite.garden.ground.texture.product",
      "not in 'tiles'"),
-    ("composite pattern product", lambda c: c["composite"]["garden"]["leaves"][0].__setitem__(
-        "texture", {"product": "patterns/nope/color.exr"}), "composite.garden.leaves[0].texture.product",
+    ("composite pattern product", lambda c: c["composite"]["garden"]["meadow"]["leaves"]["textures"].__setitem__(
+        0, {"product": "patterns/nope/color.exr"}), "composite.garden.meadow.leaves.textures[0].product",
      "not in 'patterns'"),
-    ("composite leaf date", lambda c: c["composite"]["garden"]["leaves"][1].__setitem__(
-        "texture", {"product": "leaves/maple/normal/12-31.exr"}), "composite.garden.leaves[1].texture.product",
+    ("composite leaf date", lambda c: c["composite"]["garden"]["meadow"]["leaves"]["textures"].__setitem__(
+        1, {"product": "leaves/maple/normal/12-31.exr"}), "composite.garden.meadow.leaves.textures[1].product",
      "not in 'leaves.dates'"),
-    ("composite unknown product", _set(["composite", "garden", "background"], {"product": "renders/x.exr"}),
-     "composite.garden.background.product", "not a product of any stage"),
-    ("composite shot_state", lambda c: c["composite"]["garden"]["sun"].__setitem__("shot_state", "shots/nope/params/0.yaml"),
-     "composite.garden.sun.shot_state", "not in 'shots'"),
+    ("composite unknown product", lambda c: c["composite"]["garden"]["ground"].__setitem__(
+        "texture", {"product": "renders/x.exr"}), "composite.garden.ground.texture.product", "not a product of any stage"),
+    ("composite sky_product", lambda c: c["composite"]["garden"]["sun"].__setitem__("sky_product", "sky/nope/sun.yaml"),
+     "composite.garden.sun.sky_product", "not in 'photos'"),
+    ("composite beetle layer material", lambda c: c["composite"]["garden"]["meadow"]["beetles"][0].__setitem__(
+        "layers", [{"material": "Unobtainium", "thickness_nm": 100}]),
+     "composite.garden.meadow.beetles[0].layers[0].material", "no measured index data for material 'Unobtainium'"),
+    ("composite beetle substrate", lambda c: c["composite"]["garden"]["meadow"]["beetles"][0].__setitem__(
+        "substrate", "-1.5+0.2j"), "composite.garden.meadow.beetles[0].substrate", "need n > 0"),
+    # a composite without a shot: its own background plate, camera and sun
+    ("composite background shot product", _no_shot(background={"product": "shots/nope/frames/{frame:04d}.exr"}),
+     "composite.garden.background.product", "not in 'shots'"),
+    ("composite background frame past shot", _no_shot(background={"product": "shots/tiny/frames/{frame:04d}.exr"},
+                                                      frames=[0, 5]),
+     "composite.garden.background.product", "frames [5] are past the last frame (2) of shot 'tiny'"),
+    ("mie demo deck", _set(["mie", "demo", "deck"], "nope"), "mie.demo.deck", "'nope' is not in 'volumes'"),
+    ("mie demo deck missing", _set(["mie", "demo", "deck"], None), "mie.demo.deck",
+     "names no volume, but the demo shots ['glory', 'fogbow'] look at the deck"),
     # input files
     ("volume file without path", _set(["volumes", "tiny"], {"kind": "file"}), "volumes.tiny.path", "needed with kind: file"),
     ("volume file missing", _set(["volumes", "tiny"], {"kind": "file", "path": "nope.npy"}), "volumes.tiny.path", "not found"),
@@ -80,8 +103,10 @@ CASES = [
      "not found"),
     ("petal shape missing", _set(["patterns", "tiny_spot", "shape"], {"kind": "file", "path": "nope.png"}),
      "patterns.tiny_spot.shape.path", "not found"),
-    ("composite image missing", _set(["composite", "garden", "background"], {"path": "nope_{frame}.png"}),
-     "composite.garden.background.path", "not found"),
+    ("composite image missing", lambda c: c["composite"]["garden"]["ground"].__setitem__("texture", {"path": "nope.png"}),
+     "composite.garden.ground.texture.path", "not found"),
+    ("composite background missing", _no_shot(background={"path": "nope_{frame}.png"}),
+     "composite.garden.background.path", "nope_0.png not found"),
     # geometry
     ("view camera at look_at", lambda c: c["views"]["tiny"]["camera"].update(position=[0, 0.3, 0], look_at=[0, 0.3, 0]),
      "views.tiny.camera", "equals look_at"),
@@ -89,13 +114,13 @@ CASES = [
      "views.tiny.camera", "parallel to the view direction"),
     ("shot camera at look_at", lambda c: c["shots"]["tiny"]["keyframes"][1]["camera"].update(
         position=[1, 1, 1], look_at=[1, 1, 1]), "shots.tiny.keyframes[1].camera", "equals look_at"),
-    ("composite camera up parallel", lambda c: c["composite"]["garden"]["camera"].update(
-        position=[0, 0, 0], look_at=[0, -1, 0]), "composite.garden.camera", "parallel"),
+    ("composite camera up parallel", _no_shot(camera={"position": [0, 0, 0], "look_at": [0, -1, 0], "up": [0, 1, 0],
+                                                      "fov": 40}), "composite.garden.camera", "parallel"),
     ("view sun below horizon", lambda c: c["views"]["tiny"]["sun"].__setitem__("elevation", -5),
      "views.tiny.sun.elevation", "below the horizon"),
     ("shot sun below horizon", lambda c: c["shots"]["tiny"]["keyframes"][1]["sun"].__setitem__("elevation", -2),
      "shots.tiny.keyframes[1].sun.elevation", "below the horizon"),
-    ("composite sun below horizon", _set(["composite", "garden", "sun"], {"azimuth": 10, "elevation": -10}),
+    ("composite sun below horizon", _no_shot(sun={"azimuth": 10, "elevation": -10}),
      "composite.garden.sun.elevation", "below the horizon"),
     ("mie sun below horizon", _set(["mie", "demo", "sun"], {"azimuth": 10, "elevation": 0}), "mie.demo.sun.elevation",
      "below the horizon"),
@@ -115,6 +140,19 @@ def test_config_problem_names_the_key(smoke, label, mutate, key, words):
         check_config(cfg, ROOT, source="smoke.yaml")
     msg = str(e.value)
     assert f"config key '{key}'" in msg and words in msg and "smoke.yaml" in msg, msg
+
+
+def test_a_shot_composite_is_not_refused_for_the_settings_the_shot_replaces(smoke):
+    """With ``shot`` the frame's camera, sun and cloud plate replace the composite's camera, sun and background
+    (schema: "camera, resolution, background and sky are then not used"): a degenerate camera, a sun below the
+    horizon or a missing background file there refuse nothing; the same values without the shot are refused."""
+    cfg = copy.deepcopy(smoke)
+    cfg["composite"]["garden"].update(camera={"position": [0, 1, 0], "look_at": [0, 1, 0], "up": [0, 1, 0], "fov": 40},
+                                      sun={"azimuth": 10, "elevation": -10}, background={"path": "nope.png"})
+    assert config_problems(cfg, ROOT) == []
+    del cfg["composite"]["garden"]["shot"]
+    keys = sorted(p.split("'")[1] for p in config_problems(cfg, ROOT))
+    assert keys == ["composite.garden.background.path", "composite.garden.camera", "composite.garden.sun.elevation"]
 
 
 def test_all_problems_are_reported_at_once(smoke):
@@ -188,3 +226,48 @@ def test_declared_memory_covers_every_measured_peak():
     for smk in (ROOT / "workflow" / "rules").glob("*.smk"):
         rules |= set(re.findall(r'estimated_mem_mb\("(\w+)"\)', smk.read_text()))
     assert rules <= set(MODEL), rules - set(MODEL)
+
+
+def test_mie_jobs_are_sized_by_the_volumes_they_read(smoke):
+    """The Mie demo's deck is the volume `mie.demo.deck` names: its point_scatter job and the glory and fogbow
+    renders (cloud: deck) grow with that volume's resolution, the silver lining (cloud: volume) with the demo
+    volume's; a mie_blend shot plans the point_scatter job of its own volume."""
+    from natscene.resources import job_features, planned_jobs
+    cfg = copy.deepcopy(smoke)
+    deck, demo = cfg["mie"]["demo"]["deck"], cfg["mie"]["demo"]["volume"]
+    assert (deck, demo) == ("deck", "tiny")
+    cfg["volumes"]["deck"]["resolution"] = [640, 40, 640]            # 16.4 M voxels, the tiny cumulus 51 200
+    big = 640 * 40 * 640
+    _, f, keys = job_features("point_scatter", cfg, {"volume": deck}, ROOT)
+    assert f["voxels"] == big and keys["voxels"] == "volumes.deck.resolution"
+    for shot, voxels in (("glory", big), ("fogbow", big), ("silver_lining", 40 * 32 * 40)):
+        _, f, _ = job_features("mie_render", cfg, {"volume": demo, "shot": shot}, ROOT)
+        assert f["voxels"] == voxels, shot
+    declared, key = estimate_mem_mb("point_scatter", cfg, {"volume": deck}, ROOT)
+    assert declared > estimate_mem_mb("point_scatter", smoke, {"volume": deck}, ROOT)[0]
+    assert key == "volumes.deck.resolution"
+    planned = {(r, tuple(sorted(wc.items()))) for r, wc, _ in planned_jobs(cfg)}
+    assert {("point_scatter", (("volume", "deck"),)), ("point_scatter", (("volume", "tiny"),))} <= planned
+    cfg["mie"]["demo"]["volume"] = None                              # no demo: the tiny_mie shot still needs it
+    planned = [(r, wc, e) for r, wc, e in planned_jobs(cfg) if r == "point_scatter"]
+    assert planned == [("point_scatter", {"volume": "tiny"}, "shots.tiny_mie.phase")]
+
+
+def test_composite_memory_follows_its_shot_and_meadow(smoke):
+    """A composite with a shot renders at the shot's resolution (the key to name is the shot's); its textures are
+    the ground, each flower pattern map and each leaf texture (as read and as warped)."""
+    from natscene.resources import job_features
+    cfg = copy.deepcopy(smoke)
+    entry = cfg["composite"]["garden"]
+    _, f, keys = job_features("composite", cfg, {"name": "garden"}, ROOT)
+    w, h = cfg["shots"]["tiny"]["resolution"]
+    assert f["samples"] == w * h * entry["spp"] and keys["samples"] == "shots.tiny.resolution"
+    ground = 256 * 192                                               # tiles/grass/synth_256x192.exr
+    pattern = 64 * 64                                                # patterns.tiny_spot.size
+    leaves = 2 * (48 * 48 + 64 * 64)                                 # leaves.size^2 + texture_size^2, two textures
+    assert f["texture_pixels"] == ground + pattern + leaves
+    cfg["shots"]["tiny"]["resolution"] = [1920, 1080]
+    cfg["patterns"]["tiny_spot"]["size"] = [2048, 2048]
+    _, g, _ = job_features("composite", cfg, {"name": "garden"}, ROOT)
+    assert g["samples"] == 1920 * 1080 * entry["spp"]
+    assert g["texture_pixels"] == ground + 2048 * 2048 + leaves

@@ -4,16 +4,20 @@ The schema checks each value on its own (types, ranges, allowed keys). This modu
 whole, so that no job starts on a config that would fail later with a raw exception naming no key:
 
 - **cross-references**: every name one section gives for an entry of another (keyframes -> photos, volumes,
-  views; precompute.pairs; shots -> volumes, keyframes; mie.demo.volume; composite image/sun products ->
-  shots, tiles, patterns, recolour, leaves, sky photos, fits, volumes) exists, and a product path is one that
-  a stage writes;
+  views; precompute.pairs; shots -> volumes, keyframes; mie.demo.volume and mie.demo.deck -> volumes;
+  composite.shot -> shots; composite meadow flower patterns -> patterns; composite image and sun products
+  (ground texture, leaf textures, background, sky_product) -> shots, tiles, patterns, recolour, leaves, sky
+  photos, fits, volumes) exists, and a product path is one that a stage writes;
 - **input files**: every file the config names (photos, masks, textures, petal shapes, user volumes) exists;
+- **materials**: the composite beetles' thin-film layer and substrate indices are numbers, "n+kj" strings or
+  measured tables covering the composite's wavelength range;
 - **geometry**: no degenerate camera (position at its look-at, up parallel to the view direction) in views,
-  shot keyframes and composites; the sun above the horizon where a stage needs sunlight from above (views,
-  i.e. precompute and fit; shot keyframes, whose Preetham sky is defined for a sun above the horizon; the
-  composite's sun; the Mie demo);
+  shot keyframes and composites without a shot; the sun above the horizon where a stage needs sunlight from
+  above (views, i.e. precompute and fit; shot keyframes, whose Preetham sky is defined for a sun above the
+  horizon; the sun of a composite without a shot; the Mie demo);
 - **value relations**: grids strictly increasing, the precompute's sigma_t within the fit's meaning [0, 1],
-  keyframe frames inside their shot, a composite frame inside the shot it reads.
+  keyframe frames inside their shot, a composite's frames inside its shot (or inside the shot whose frames a
+  product background names).
 
 Every problem is reported with the key's path (``keyframes.kite.photo``), and all problems at once.
 """
@@ -274,29 +278,73 @@ def _check_mie(p, config):
     demo = (config.get("mie") or {}).get("demo") or {}
     if demo.get("volume") is not None:
         _ref(p, config, "mie.demo.volume", demo["volume"], "volumes")
+        deck_shots = [s for s in ("glory", "fogbow", "silver_lining") if (demo.get(s) or {}).get("cloud") == "deck"]
+        if demo.get("deck") is not None:
+            _ref(p, config, "mie.demo.deck", demo["deck"], "volumes")
+        elif deck_shots:
+            p.add("mie.demo.deck", f"names no volume, but the demo shots {deck_shots} look at the deck "
+                                   f"(cloud: deck); name a stratocumulus volume of 'volumes' or set their cloud "
+                                   f"to 'volume'")
         _sun_above(p, "mie.demo.sun", demo.get("sun"), "the Mie demo (glory, fogbow, silver lining)")
 
 
+def _material_problem(material, wavelengths: tuple[float, float]) -> str | None:
+    """Why a thin-film layer or substrate index (table name, real number or "n+kj" string) cannot be used over
+    the composite's wavelength range."""
+    if isinstance(material, (int, float)) and not isinstance(material, bool):
+        return None if material > 0 else f"{material!r}: a real index must be > 0"
+    from natscene.errors import InputError
+    from natscene.spectral.indices import complex_index
+    try:
+        complex_index(material, list(wavelengths))  # a measured table must cover the spectral grid
+    except InputError as e:
+        return str(e)
+    return None
+
+
 def _check_composite(p, config, root):
+    shots = config.get("shots") or {}
     for name, c in (config.get("composite") or {}).items():
         key = f"composite.{name}"
         frames = list(c.get("frames") or [0])
-        _camera(p, f"{key}.camera", c.get("camera"))
-        _image_source(p, config, root, f"{key}.background", c.get("background"), frames)
-        _image_source(p, config, root, f"{key}.ground.texture", (c.get("ground") or {}).get("texture"), frames)
-        for i, leaf in enumerate(c.get("leaves") or []):
-            _image_source(p, config, root, f"{key}.leaves[{i}].texture", leaf.get("texture"), frames)
-        sun = c.get("sun") or {}
-        if sun.get("shot_state"):
-            why = _product_problem(config, sun["shot_state"], frames)
-            if why:
-                p.add(f"{key}.sun.shot_state", f"{sun['shot_state']!r} {why}")
+        shot = c.get("shot")
+        if shot is not None:
+            # frame k of the composite is frame k of the shot: its camera, sun, sky and cloud plate
+            if _ref(p, config, f"{key}.shot", shot, "shots"):
+                n = shots[shot].get("frames", 24)
+                bad = [f for f in frames if f >= n]
+                if bad:
+                    p.add(f"{key}.frames", f"frames {bad} are past the last frame ({n - 1}) of shot {shot!r}; "
+                                           f"lower them or raise 'shots.{shot}.frames'")
         else:
-            _sun_above(p, f"{key}.sun", sun, "the composite (the sun lights the ground, petals and leaves)")
+            # without a shot: the composite's own camera, background plate and sun
+            _camera(p, f"{key}.camera", c.get("camera"))
+            _image_source(p, config, root, f"{key}.background", c.get("background"), frames)
+            _sun_above(p, f"{key}.sun", c.get("sun"), "the composite (the sun lights the ground, petals and leaves)")
+        sun = c.get("sun") or {}
         if sun.get("sky_product"):
             why = _product_problem(config, sun["sky_product"], frames)
             if why:
                 p.add(f"{key}.sun.sky_product", f"{sun['sky_product']!r} {why}")
+        _image_source(p, config, root, f"{key}.ground.texture", (c.get("ground") or {}).get("texture"), frames)
+        meadow = c.get("meadow") or {}
+        for i, flower in enumerate(meadow.get("flowers") or []):
+            # petals are textured with patterns/<pattern>/color.exr, made for the entries of 'patterns'
+            _ref(p, config, f"{key}.meadow.flowers[{i}].pattern", flower.get("pattern"), "patterns")
+        for i, src in enumerate((meadow.get("leaves") or {}).get("textures") or []):
+            _image_source(p, config, root, f"{key}.meadow.leaves.textures[{i}]", src, frames)
+        wl = c.get("wavelengths") or {}
+        span = (float(wl.get("start", 380)), float(wl.get("stop", 780)))
+        for i, beetle in enumerate(meadow.get("beetles") or []):
+            bk = f"{key}.meadow.beetles[{i}]"
+            for j, layer in enumerate(beetle.get("layers") or []):
+                why = _material_problem(layer.get("material"), span)
+                if why:
+                    p.add(f"{bk}.layers[{j}].material", why)
+            if "substrate" in beetle:
+                why = _material_problem(beetle["substrate"], span)
+                if why:
+                    p.add(f"{bk}.substrate", why)
 
 
 def config_problems(config: dict, root: str | os.PathLike) -> list[str]:

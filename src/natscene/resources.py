@@ -33,12 +33,11 @@ SLACK_MB = 200.0
 #: rule -> {"base": MB, feature: MB per unit}. Fitted by benchmarks/memory.py (see the module docstring).
 MODEL: dict[str, dict[str, float]] = {  # bytes per unit / MB; n = measured jobs, residual = largest misfit
     "animation": {"base": 182.7, "pixels": 35.93 / MB},  # n=2, max residual 0.0 MB
-    "composite": {"base": 216.5, "samples": 0 / MB, "texture_pixels": 178 / MB},  # n=5, max residual 186.8 MB
-    "composite_reference": {"base": 273.1, "spectral_samples": 6.96 / MB, "texture_pixels": 0 / MB},  # n=4, max residual 28.3 MB
+    "composite": {"base": 323.9, "samples": 0 / MB, "texture_pixels": 173 / MB},  # n=4, max residual 115.3 MB
+    "composite_reference": {"base": 373.6, "spectral_samples": 8.105 / MB, "texture_pixels": 0 / MB},  # n=3, max residual 0.5 MB
     "fit": {"base": 298.3, "pixels": 2275 / MB, "table_values": 0 / MB},  # n=2, max residual 0.0 MB
     "interpolate": {"base": 162.0},  # n=8, max residual 0.0 MB
     "leaf_season": {"base": 266.5, "pixels": 223.5 / MB},  # n=5, max residual 0.0 MB
-    "mie_deck": {"base": 147.6, "voxels": 1405 / MB},  # n=2, max residual 0.0 MB
     "mie_render": {"base": 330.0, "pixels": 1068 / MB, "voxels": 64.25 / MB},  # n=6, max residual 2.3 MB
     "mie_table": {"base": 320.0},  # n=2, max residual 0.0 MB
     "mie_table_droplets": {"base": 319.0},  # n=2, max residual 0.0 MB
@@ -48,7 +47,7 @@ MODEL: dict[str, dict[str, float]] = {  # bytes per unit / MB; n = measured jobs
     "point_scatter": {"base": 227.1, "voxels": 67.19 / MB},  # n=8, max residual 4.6 MB
     "precompute": {"base": 365.9, "paths": 353.6 / MB, "pixels": 0 / MB, "table_values": 0 / MB, "voxels": 12.15 / MB},  # n=5, max residual 145.3 MB
     "recolour": {"base": 288.7, "pixels": 452.4 / MB},  # n=3, max residual 0.5 MB
-    "render_frame": {"base": 282.7, "paths": 0 / MB, "pixels": 638.9 / MB, "voxels": 39.65 / MB},  # n=8, max residual 13.5 MB
+    "render_frame": {"base": 467.5, "paths": 0 / MB, "pixels": 1323 / MB, "voxels": 44.89 / MB},  # n=8, max residual 85.4 MB
     "sky": {"base": 204.5, "pixels": 684.8 / MB},  # n=3, max residual 8.9 MB
     "sky_resample": {"base": 184.7, "pixels": 62.58 / MB},  # n=2, max residual 0.0 MB
     "tile_texture": {"base": 185.2, "pixels": 182 / MB},  # n=5, max residual 40.2 MB
@@ -94,15 +93,9 @@ def grid_file_voxels(path: str | os.PathLike) -> int | None:
 
 
 def volume_voxels(config: dict, name: str, root) -> tuple[int, str]:
-    """(voxels, the config key that sets them) of volume ``name`` (``mie_deck``: the Mie demo's deck)."""
-    if name == "mie_deck":
-        deck = (config.get("mie") or {}).get("deck") or {}
-        n = int(deck.get("resolution", 160))
-        vox = float(deck.get("size", 2.0)) / n
-        ny = max(4, int(math.ceil(float(deck.get("thickness", 0.06)) * (1 + 2.5 * float(deck.get("relief", 0.15)))
-                                  / vox)) + 3)
-        return n * n * ny, "mie.deck.resolution"
-    v = (config.get("volumes") or {}).get(name) or {}
+    """(voxels, the config key that sets them) of volume ``name`` of ``volumes`` (the Mie demo's deck included:
+    it is the volume ``mie.demo.deck`` names)."""
+    v = config["volumes"][name]
     if v.get("kind") == "file" and v.get("path"):
         n = grid_file_voxels(resolve_path(v["path"], root))
         if n is not None:
@@ -131,7 +124,8 @@ def _table_values(config: dict, pixels: int) -> int:
 
 
 def _texture_pixels(config: dict, src: dict | None, root) -> int:
-    """Pixels of a composite image source (tiles products by their name, files by their header)."""
+    """Pixels of a composite image source (tiles, leaves and pattern products by their name and config, files by
+    their header)."""
     if not isinstance(src, dict):
         return 0
     if "product" in src:
@@ -139,11 +133,35 @@ def _texture_pixels(config: dict, src: dict | None, root) -> int:
         m = re.search(r"synth_(\d+)x(\d+)", src["product"])
         if m:
             return int(m.group(1)) * int(m.group(2))
+        if src["product"].startswith("leaves/"):  # a season stage: leaves.size squared
+            return int((config.get("leaves") or {}).get("size", 256)) ** 2
+        parts = src["product"].split("/")
+        if parts[0] == "patterns" and len(parts) > 2 and parts[1] == "recolour":  # a recoloured flower photo
+            photo = ((config.get("recolour") or {}).get(parts[2]) or {}).get("photo")
+            size = image_size(resolve_path(photo, root)) if photo else None
+            return _pixels(size) if size else 0
+        if parts[0] == "patterns" and len(parts) > 1:  # a pattern map: patterns.<name>.size
+            return _pixels(((config.get("patterns") or {}).get(parts[1]) or {}).get("size", [549, 528]))
         return 0
     if "path" in src:
         size = image_size(resolve_path(src["path"], root))
         return _pixels(size) if size else 0
     return 0
+
+
+def _composite_texture_pixels(config: dict, entry: dict, root) -> int:
+    """Texture pixels a composite frame holds (natscene.composite.inputs.build_set): the ground texture, each
+    distinct flower pattern map (``patterns.<pattern>.size``), each season leaf texture as read and as warped
+    onto the maple outline (``meadow.leaves.texture_size`` squared)."""
+    n = _texture_pixels(config, (entry.get("ground") or {}).get("texture"), root)
+    meadow = entry.get("meadow") or {}
+    patterns = config.get("patterns") or {}
+    for pattern in {f["pattern"] for f in meadow.get("flowers") or []}:
+        n += _pixels(patterns.get(pattern, {}).get("size", [549, 528]))
+    leaves = meadow.get("leaves") or {}
+    for src in leaves.get("textures") or []:
+        n += _texture_pixels(config, src, root) + int(leaves.get("texture_size", 256)) ** 2
+    return n
 
 
 def job_features(rule: str, config: dict, wildcards: dict, root) -> tuple[str, dict, dict]:
@@ -182,28 +200,31 @@ def job_features(rule: str, config: dict, wildcards: dict, root) -> tuple[str, d
         feats["pixels"], keys["pixels"] = p, f"shots.{wc['shot']}.resolution"
         feats["paths"] = _paths_per_pass(p, (shot.get("render") or {}).get("spp", 16))
         keys["paths"] = f"shots.{wc['shot']}.resolution"
-    elif rule in ("point_scatter", "mie_deck"):
-        name = wc.get("volume", "mie_deck")
-        feats["voxels"], keys["voxels"] = volume_voxels(config, name, root)
+    elif rule == "point_scatter":
+        feats["voxels"], keys["voxels"] = volume_voxels(config, wc["volume"], root)
     elif rule == "mie_render":
         demo = (config.get("mie") or {}).get("demo") or {}
-        shot = (demo.get(wc.get("shot", "")) or {})
-        name = "mie_deck" if shot.get("cloud") == "deck" else wc["volume"]
+        shot = demo.get(wc["shot"]) or {}
+        # the glory and fogbow (cloud: deck) look at the deck volume, the silver lining at the demo volume
+        name = demo["deck"] if shot.get("cloud", "volume") == "deck" else wc["volume"]
         feats["voxels"], keys["voxels"] = volume_voxels(config, name, root)
         feats["pixels"], keys["pixels"] = _pixels(demo.get("resolution", [480, 360])), "mie.demo.resolution"
     elif rule in ("composite", "composite_reference"):
         c = config["composite"][wc["name"]]
-        p = _pixels(c.get("resolution", [320, 240]))
+        if c.get("shot"):  # frame k of the shot: its camera and resolution
+            p = _pixels(config["shots"][c["shot"]].get("resolution", [640, 480]))
+            key = f"shots.{c['shot']}.resolution"
+        else:
+            p = _pixels(c.get("resolution", [320, 240]))
+            key = f"composite.{wc['name']}.resolution"
         spp = int(c.get("spp", 4))
-        key = f"composite.{wc['name']}.resolution"
         if rule == "composite":
             feats["samples"], keys["samples"] = p * spp, key
         else:
             wl = c.get("wavelengths") or {}
             n_wl = int(round((float(wl.get("stop", 780)) - float(wl.get("start", 380))) / float(wl.get("step", 5)))) + 1
             feats["spectral_samples"], keys["spectral_samples"] = p * spp * n_wl, key
-        tex = [(c.get("ground") or {}).get("texture")] + [leaf.get("texture") for leaf in c.get("leaves") or []]
-        feats["texture_pixels"] = sum(_texture_pixels(config, t, root) for t in tex)
+        feats["texture_pixels"] = _composite_texture_pixels(config, c, root)
         keys["texture_pixels"] = f"composite.{wc['name']}.ground.texture"
     elif rule == "tileset":
         t = config["tiles"][wc["texture"]]
@@ -304,10 +325,14 @@ def planned_jobs(config: dict) -> list[tuple[str, dict, str]]:
         jobs.append(("animation", {"shot": s}, f"shots.{s}"))
     demo = (config.get("mie") or {}).get("demo") or {}
     if demo.get("volume"):
-        for vol in (demo["volume"], "mie_deck"):
-            jobs.append(("point_scatter", {"volume": vol}, "mie.demo.volume" if vol != "mie_deck" else "mie.deck"))
+        jobs.append(("point_scatter", {"volume": demo["volume"]}, "mie.demo.volume"))
+        if demo.get("deck"):
+            jobs.append(("point_scatter", {"volume": demo["deck"]}, "mie.demo.deck"))
         for shot in ("glory", "fogbow", "silver_lining"):
             jobs.append(("mie_render", {"volume": demo["volume"], "shot": shot}, "mie.demo"))
+    for s, shot in (config.get("shots") or {}).items():
+        if shot.get("phase") == "mie_blend":  # the point-to-point solutions of the shot volume, one per sun
+            jobs.append(("point_scatter", {"volume": shot["volume"]}, f"shots.{s}.phase"))
     for c, entry in (config.get("composite") or {}).items():
         jobs.append(("composite", {"name": c}, f"composite.{c}"))
         if entry.get("reference"):
