@@ -46,7 +46,7 @@ class AllOrdersSettings:
     sky_photons_max: int = 2_000_000
     fine_voxels: int = 2
     coarse_voxels: int = 4
-    guide_width: tuple = (0.5, 1.0)      # optical depth, fine and coarse cache
+    guide_width: tuple = (0.0, 0.0)      # optical depth, fine and coarse cache (0: no smoothing)
     max_order: int = 4096
     sun_bands: tuple = SUN_BANDS
     sky_bands: tuple = SKY_BANDS

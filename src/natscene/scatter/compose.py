@@ -129,6 +129,9 @@ def population(params: dict) -> tuple[int, dict]:
     out["c_in"] = np.broadcast_to(c_in.reshape(-1, 3) if c_in.size % 3 == 0 else c_in[..., None], (P, 3)).copy()
     out["kappa_a"] = np.broadcast_to(kap.reshape(-1, 3) if kap.ndim >= 1 and kap.shape[-1] == 3
                                      else kap.reshape(-1, 1), (P, 3)).copy()
+    for k in ("sky_scale", "ground_albedo"):     # all-orders only: kept when given, (P, 3)
+        if k in params:
+            out[k] = _pop3(params, k, P, None)
     for k in ("g",):
         if np.any(np.abs(out[k]) >= 1):
             raise InputError(f"compose: g must lie in (-1, 1), got {out[k].tolist()}")

@@ -84,32 +84,20 @@ def cache_radiance(numerators: np.ndarray, density_integrals: np.ndarray, sig_k:
                    guide: np.ndarray | None = None, guide_width: float = 0.0, floor: float = 1e-7) -> np.ndarray:
     """S (..., cz, cy, cx) float32 from tallies (..., cz, cy, cx): the ratio C / (sig_k ∫rho dV).
 
-    With ``guide`` (cz, cy, cx; the cells' optical depth toward the camera) and ``guide_width`` > 0, numerator
-    and denominator are both filtered by a 3x3x3 cross-bilateral kernel before the division: a [1, 2, 1]
-    tent in space times exp(-(Δguide)² / (2 guide_width²)). It averages cells at the same optical depth
-    from the camera (along the visible surface) but not across depth, where S changes over a mean free path
-    near the surface; a plain spatial kernel biased thick clouds (sigma_t = 1) by several per cent against
-    Mitsuba. Cells without density take the value of the nearest cell with density (``floor`` times the
+    With ``guide`` (cz, cy, cx; the cells' optical depth toward the camera) and ``guide_width`` > 0, S is
+    smoothed by a 3x3x3 cross-bilateral local-linear fit (:func:`_local_linear`): a [1, 2, 1] tent in space
+    times exp(-(Δguide)² / (2 guide_width²)), so that it averages cells at the same optical depth from the
+    camera (along the visible surface) but not across depth, where S changes over a mean free path near the
+    surface. The fit is local-linear, not a weighted mean: a weighted mean of S pulls the cells at the
+    cloud's edge toward the denser interior (the weights are the cells' ∫rho), which brightened thin clouds
+    by 5-20 % against Mitsuba; a local plane has no such first-order bias. Cells without density take the value of the nearest cell with density (``floor`` times the
     largest ∫rho), so the trilinear lookup at the cloud's edge blends in no zeros.
     """
     from scipy.ndimage import distance_transform_edt
     num = np.asarray(numerators, np.float64)
     den = np.asarray(density_integrals, np.float64)
     if guide is not None and guide_width > 0:
-        cz, cy, cx = den.shape
-        pn = np.pad(num, [(0, 0)] * (num.ndim - 3) + [(1, 1)] * 3)
-        pd = np.pad(den, 1)
-        pg = np.pad(np.asarray(guide, np.float64), 1, mode="edge")
-        acc_n, acc_d = np.zeros_like(num), np.zeros_like(den)
-        inv2w2 = 0.5 / float(guide_width) ** 2
-        for dz in (-1, 0, 1):
-            for dy in (-1, 0, 1):
-                for dx in (-1, 0, 1):
-                    sl = (slice(1 + dz, 1 + dz + cz), slice(1 + dy, 1 + dy + cy), slice(1 + dx, 1 + dx + cx))
-                    w = (0.5 ** (3 + abs(dz) + abs(dy) + abs(dx))) * np.exp(-inv2w2 * (pg[sl] - guide) ** 2)
-                    acc_n += w * pn[(Ellipsis,) + sl]
-                    acc_d += w * pd[sl]
-        num, den = acc_n, acc_d
+        num, den = _local_linear(num, den, np.asarray(guide, np.float64), float(guide_width))
     D = den * (sig_k * voxel_volume)
     ok = den > floor * den.max()
     S = np.zeros(num.shape, np.float64)
@@ -164,3 +152,49 @@ def gather(med, camera, sigma: float, caches: np.ndarray, factor: int, step_voxe
     acc = _march(med, tex, C, o, d, float(sigma) * med.scale, med.voxel * step_voxels, lo, cache_ext,
                  np.asarray(box_lo, np.float64), np.asarray(box_hi, np.float64))
     return np.stack([pixel_mean(a, supersample, W, H) for a in acc])
+
+
+def _local_linear(num: np.ndarray, den: np.ndarray, guide: np.ndarray, width: float):
+    """Cross-bilateral local-linear smoothing of S = num / den over 3x3x3 cells.
+
+    Per cell c, S_c = a is the intercept of the plane a + b·o (o the neighbour offset) fitted by weighted least
+    squares to the neighbours' ratios S_o = num_o / den_o with weights k_o den_o (k_o the tent times the
+    guide's Gaussian): normal equations M [a, b] = r with M = Σ k_o den_o [1, o][1, o]^T and
+    r = Σ k_o num_o [1, o]. Where the plane is ill-determined (a cell with few dense neighbours) or its
+    intercept is negative, the weighted mean Σ k num / Σ k den is used. Returns (a·den, den) so that the
+    caller's ratio gives a."""
+    cz, cy, cx = den.shape
+    lead = num.shape[:-3]
+    pn = np.pad(num, [(0, 0)] * len(lead) + [(1, 1)] * 3)
+    pd = np.pad(den, 1)
+    pg = np.pad(guide, 1, mode="edge")
+    inv2w2 = 0.5 / width ** 2
+    M = np.zeros((cz, cy, cx, 4, 4))
+    r = np.zeros(lead + (cz, cy, cx, 4))
+    for dz in (-1, 0, 1):
+        for dy in (-1, 0, 1):
+            for dx in (-1, 0, 1):
+                sl = (slice(1 + dz, 1 + dz + cz), slice(1 + dy, 1 + dy + cy), slice(1 + dx, 1 + dx + cx))
+                k = (0.5 ** (3 + abs(dz) + abs(dy) + abs(dx))) * np.exp(-inv2w2 * (pg[sl] - guide) ** 2)
+                v = np.array([1.0, dx, dy, dz])
+                kd = k * pd[sl]
+                M += kd[..., None, None] * np.outer(v, v)
+                r += (k * pn[(Ellipsis,) + sl])[..., None] * v
+    mean_den = M[..., 0, 0]
+    ok = mean_den > 0
+    u = np.zeros((cz, cy, cx, 4))
+    e0 = np.zeros(4)
+    e0[0] = 1.0
+    Mo = M[ok] + np.eye(4) * (1e-9 * mean_den[ok])[:, None, None]
+    cond = np.linalg.cond(Mo)
+    good = cond < 1e4
+    sol = np.zeros((Mo.shape[0], 4))
+    if good.any():
+        sol[good] = np.linalg.solve(Mo[good], np.broadcast_to(e0, (int(good.sum()), 4))[..., None])[..., 0]
+    u[ok] = sol
+    a_lin = np.einsum("...zyxi,zyxi->...zyx", r, u)
+    a_mean = np.divide(r[..., 0], mean_den, out=np.zeros(r.shape[:-1]), where=ok)
+    use_lin = np.zeros((cz, cy, cx), bool)
+    use_lin[ok] = good
+    a = np.where(use_lin & (a_lin >= 0), a_lin, a_mean)
+    return a * den, den

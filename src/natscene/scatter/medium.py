@@ -74,12 +74,18 @@ class Medium:
             return self.sun_depth_tex.eval(self.to_uvw(p))[0]
         s = mi.Vector3f(*[float(c) for c in self.sun_dir])
         _, t_far = ray_box_dr(p, s, self.bbox_min, self.bbox_max)
-        length = dr.minimum(self.near_voxels * self.voxel, dr.maximum(t_far, 0.0))
+        t_far = dr.maximum(t_far, 0.0)
+        near = self.near_voxels * self.voxel
+        # within a voxel of the box face the march goes on to the face: the voxel-centred D is clamped over the
+        # last half voxel (there it is the face voxel's D, not the smaller true one), which darkened a slab
+        # dense up to its face by e^-(sigma rho h / 2) (23 % at 4 voxels across the slab, order 1)
+        to_face = t_far <= near + self.voxel
+        length = dr.select(to_face, t_far, near)
         h = length / self.near_steps
         acc = mi.Float(0.0)
         for i in range(self.near_steps):
             acc += self.rho(p + s * ((i + 0.5) * h)) * h
-        return acc + self.sun_depth_tex.eval(self.to_uvw(p + s * length))[0]
+        return acc + dr.select(to_face, 0.0, self.sun_depth_tex.eval(self.to_uvw(p + s * length))[0])
 
 
 def _check_volume(volume) -> np.ndarray:
