@@ -45,6 +45,9 @@ MODEL: dict[str, dict[str, float]] = {  # bytes per unit / MB; n = measured jobs
     "pattern_sheet": {"base": 192.0, "pixels": 256 / MB},  # n=2, max residual 0.0 MB
     "pigment_maps": {"base": 165.6, "pixels": 725.4 / MB},  # n=4, max residual 4.0 MB
     "point_scatter": {"base": 227.1, "voxels": 67.19 / MB},  # n=8, max residual 4.6 MB
+    # all-orders transport: one main-job run (cumulus 160x112x160, 320x240, 7 sigma_t x 5 g, 8 + 4x3 bands):
+    # 1655 MB peak, 55.9 M table values -> 22.5 bytes per value over base and voxels
+    "precompute_all_orders": {"base": 365.9, "table_values": 22.5 / MB, "voxels": 12.15 / MB},  # n=1
     "precompute": {"base": 365.9, "paths": 353.6 / MB, "pixels": 0 / MB, "table_values": 0 / MB, "voxels": 12.15 / MB},  # n=5, max residual 145.3 MB
     "recolour": {"base": 288.7, "pixels": 452.4 / MB},  # n=3, max residual 0.5 MB
     "render_frame": {"base": 467.5, "paths": 0 / MB, "pixels": 1323 / MB, "voxels": 44.89 / MB},  # n=8, max residual 85.4 MB
@@ -116,11 +119,17 @@ def _pixels(res) -> int:
 
 
 def _table_values(config: dict, pixels: int) -> int:
+    """Float values of the precompute tables: 4 single-scattering/geometry images per sigma_t, plus per (g,
+    sigma_t) the n_m - 1 orders (dobashi) or the sun's 8 bands and the sky's 3 bands x 4 channels (all_orders)."""
     pre = config.get("precompute") or {}
     n_s = len(pre.get("sigma_t", [0] * 11))
     n_g = len(pre.get("g", [0] * 10))
-    n_m = int(pre.get("n_m", 4))
-    return pixels * n_s * (4 + n_g * max(n_m - 1, 1))
+    if pre.get("transport", "all_orders") == "all_orders":
+        ao = pre.get("all_orders") or {}
+        per_node = len(ao.get("sun_bands") or [0] * 8) + 4 * len(ao.get("sky_bands") or [0] * 3)
+    else:
+        per_node = max(int(pre.get("n_m", 4)) - 1, 1)
+    return pixels * n_s * (4 + n_g * per_node)
 
 
 def _texture_pixels(config: dict, src: dict | None, root) -> int:
@@ -182,8 +191,11 @@ def job_features(rule: str, config: dict, wildcards: dict, root) -> tuple[str, d
         feats["pixels"], keys["pixels"] = p, f"views.{wc['view']}.resolution"
         feats["table_values"], keys["table_values"] = _table_values(config, p), f"views.{wc['view']}.resolution"
         pre = config.get("precompute") or {}
-        feats["paths"] = _paths_per_pass(p, pre.get("spp", 256), pre.get("batch_spp"))
-        keys["paths"] = "precompute.batch_spp"
+        if pre.get("transport", "all_orders") == "all_orders":
+            model = "precompute_all_orders"
+        else:
+            feats["paths"] = _paths_per_pass(p, pre.get("spp", 256), pre.get("batch_spp"))
+            keys["paths"] = "precompute.batch_spp"
     elif rule == "fit":
         kf = config["keyframes"][wc["keyframe"]]
         p = _pixels(config["views"][kf["view"]].get("resolution", [320, 240]))
