@@ -179,7 +179,7 @@ def standard_error(half_a: np.ndarray, half_b: np.ndarray) -> np.ndarray:
     from scipy.ndimage import uniform_filter
     v = ((np.asarray(half_a, np.float64) - np.asarray(half_b, np.float64)) / 2) ** 2
     size = [1] * (v.ndim - 2) + [3, 3]
-    return np.sqrt(uniform_filter(v, size=size, mode="nearest")).astype(np.float32)
+    return np.sqrt(np.maximum(uniform_filter(v, size=size, mode="nearest"), 0.0)).astype(np.float32)   # >= 0 up to rounding
 
 
 def view_images(scene: Scene, camera, sigma: float, g: float, seed: int = 0) -> ViewImages:
