@@ -37,9 +37,19 @@ from natscene.keyframes.shot import (bracket, frame_state, keyframe_params, quan
 from natscene.variant import select_variant
 from natscene.volume.grid import load_volume
 
-PARAMS = {"L_in": 9.94, "g": 0.229, "sigma_t": 0.551, "beta": 0.966, "L_amb": 0.643,
-          "kappa_a": [0.2, 0.2, 0.5], "c_in": [0.97, 1.0, 1.06]}  # the kite fit
-CAM = {"position": [0.15, 0.25, -1.45], "look_at": [0.0, 0.32, 0.0], "up": [0, 1, 0], "fov": 38}  # the kite view
+# the kite fit of the main job (results/fit/kite/params.yaml when it exists: see _kite_params)
+PARAMS = {"L_in": 6.35, "g": 0.698, "sigma_t": 0.123, "beta": 0.9998, "L_amb": 0.0,
+          "kappa_a": [0.0, 0.1, 0.6], "c_in": [0.971, 1.002, 1.065]}
+
+
+def _kite_params() -> dict:
+    """The chosen parameters of the main job's kite fit, or PARAMS when the fit has not run."""
+    from natscene.io import read_yaml
+    f = ROOT / "results" / "fit" / "kite" / "params.yaml"
+    if not f.is_file():
+        return dict(PARAMS)
+    ch = read_yaml(f)["chosen"]
+    return {k: ch[k] for k in PARAMS}
 
 
 def _state(params, az, el, camera):
@@ -112,7 +122,9 @@ def main():
         vol, _ = build_volume(cfg["volumes"]["cumulonimbus"], "cumulonimbus")
     oidn = OIDN(key="benchmark", threads=2)
     shot = {**day, "phase": "hg", "denoise": "oidn"}
-    state = _state(PARAMS, 120.0, 30.0, CAM)
+    cam = dict(day["keyframes"][0]["camera"])                # the day shot's first camera (metres)
+    cam.setdefault("up", [0, 1, 0])
+    state = _state(_kite_params(), 120.0, 30.0, cam)
     render_shot_frame(vol, state, {**shot, "resolution": [32, 24], "render": {**shot["render"], "spp": 1}},
                       denoiser=oidn)                                         # compile the kernels once
     load0 = os.getloadavg()[0]
