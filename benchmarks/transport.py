@@ -41,6 +41,15 @@ def main_job():
     return cfg
 
 
+def kite_setup():
+    """(config, camera, sun direction, volume) of the main job's cumulus seen from the kite view."""
+    cfg = main_job()
+    view = cfg["views"]["kite"]
+    camera = Camera.from_view(view)
+    sun = sun_direction(view["sun"]["azimuth"], view["sun"]["elevation"])
+    return cfg, camera, sun, volume(cfg)
+
+
 def photo_products(cfg, w, h):
     """The kite photo's L_sky, photo, cloud mask and c_in at the view's resolution (the sky stage in-process)."""
     from natscene.io import read_photo
@@ -102,11 +111,7 @@ def main():
     from natscene.variant import select_variant
 
     select_variant(threads=2)
-    cfg = main_job()
-    view = cfg["views"]["kite"]
-    camera = Camera.from_view(view)
-    sun = sun_direction(view["sun"]["azimuth"], view["sun"]["elevation"])
-    vol = volume(cfg)
+    cfg, camera, sun, vol = kite_setup()
     pre = cfg["precompute"]
     products, _ = photo_products(cfg, camera.width, camera.height)
     result = {"volume": "cumulus", "view": "kite", "resolution": [camera.width, camera.height],

@@ -26,7 +26,6 @@ import numpy as np
 from _common import ROOT, write_result
 
 import natscene  # noqa: F401
-from natscene.geometry import Camera, sun_direction
 
 TRUE = {"L_in": 4.0, "g": 0.85, "sigma_t": 0.5, "beta": 0.999}
 
@@ -99,16 +98,12 @@ def main():
     ap.add_argument("--seeds", type=int, default=10)
     ap.add_argument("--target-spp", type=int, default=256)
     args = ap.parse_args()
-    from transport import main_job, photo_products, volume
+    from transport import kite_setup, photo_products
     from natscene.fit.report import contact_sheet
     from natscene.io import write_png
     from natscene.variant import select_variant
     select_variant(threads=2)
-    cfg = main_job()
-    view = cfg["views"]["kite"]
-    camera = Camera.from_view(view)
-    sun = sun_direction(view["sun"]["azimuth"], view["sun"]["elevation"])
-    vol = volume(cfg)
+    cfg, camera, sun, vol = kite_setup()
     prod, _ = photo_products(cfg, camera.width, camera.height)
     tabs = {t: tables_for(t, cfg, vol, camera, sun) for t in ("all_orders", "dobashi")}
     out = {"seeds": args.seeds, "true": TRUE}
