@@ -199,6 +199,18 @@ def test_job_too_big_is_refused_with_estimate_and_key(smoke, monkeypatch):
     assert not [p for p in memory_problems(cfg, ROOT) if "rule volume" in p]
 
 
+def test_job_overhead_is_added_to_every_job(smoke, monkeypatch):
+    """On SLURM a job's --mem also holds two Snakemake processes (docs/cluster.md): $NATSCENE_JOB_OVERHEAD_MB
+    (set by tools/slurm_run.py) is added to each rule's mem_mb; a bad value names the variable."""
+    monkeypatch.delenv("NATSCENE_JOB_OVERHEAD_MB", raising=False)
+    local, _ = estimate_mem_mb("volume", smoke, {"volume": "tiny"}, ROOT)
+    monkeypatch.setenv("NATSCENE_JOB_OVERHEAD_MB", "400")
+    assert estimate_mem_mb("volume", smoke, {"volume": "tiny"}, ROOT)[0] == local + 400
+    monkeypatch.setenv("NATSCENE_JOB_OVERHEAD_MB", "lots")
+    with pytest.raises(ConfigError, match="NATSCENE_JOB_OVERHEAD_MB"):
+        estimate_mem_mb("volume", smoke, {"volume": "tiny"}, ROOT)
+
+
 def test_user_grid_size_is_read_from_its_header(smoke, tmp_path):
     import numpy as np
     from natscene.resources import grid_file_voxels

@@ -30,6 +30,9 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 PROFILE = ROOT / "workflow" / "profiles" / "slurm"
+#: MB added to every job's mem_mb (natscene.resources.job_overhead_mb): under SLURM's cgroup memory limit a job
+#: holds Snakemake's batch step (~200 MB) and the Snakemake that runs the rule in the job step (~190 MB) too
+SLURM_JOB_OVERHEAD_MB = 400
 
 
 class SetupError(RuntimeError):
@@ -253,7 +256,9 @@ def main(argv: list[str] | None = None) -> int:
     print("slurm_run: " + " ".join(cmd), file=sys.stderr, flush=True)
     # Snakemake's output goes to the terminal as it comes; a copy is kept to find the run's SLURM jobs.
     # the memory one job can have: a node's, not this login host's (natscene.resources refuses bigger jobs)
-    env = dict(os.environ, NATSCENE_MEMORY_MB=os.environ.get("NATSCENE_MEMORY_MB", str(mem_mb)))
+    env = dict(os.environ, NATSCENE_MEMORY_MB=os.environ.get("NATSCENE_MEMORY_MB", str(mem_mb)),
+               # a job's --mem also covers Snakemake's batch step and the Snakemake of its job step
+               NATSCENE_JOB_OVERHEAD_MB=os.environ.get("NATSCENE_JOB_OVERHEAD_MB", str(SLURM_JOB_OVERHEAD_MB)))
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, bufsize=1, env=env)
     captured = []
     assert proc.stdout is not None

@@ -285,10 +285,28 @@ def estimate_mem_mb(rule: str, config: dict, wildcards: dict, root) -> tuple[int
     coef = MODEL.get(model, {})
     parts = {f: coef.get(f, 0.0) * float(v) for f, v in feats.items()}
     top = max(parts, key=parts.get) if parts else None
-    declared = declared_mb(model, feats)
+    declared = declared_mb(model, feats) + job_overhead_mb()
     if top is None or parts[top] < coef.get("base", 0.0):
         return declared, ""
     return declared, keys.get(top, "")
+
+
+def job_overhead_mb() -> int:
+    """Memory a job needs besides its rule's own process (``$NATSCENE_JOB_OVERHEAD_MB``, default 0).
+
+    On SLURM a job's memory limit covers Snakemake's batch step (about 200 MB) and the Snakemake process that
+    runs the rule inside the job step (about 190 MB) as well; ``tools/slurm_run.py`` sets 400 there. Locally
+    the rule runs inside the one Snakemake process that is not counted against any job, so 0."""
+    env = os.environ.get("NATSCENE_JOB_OVERHEAD_MB")
+    if not env:
+        return 0
+    try:
+        v = int(float(env))
+    except ValueError:
+        raise ConfigError(f"$NATSCENE_JOB_OVERHEAD_MB={env!r} is not a number of megabytes") from None
+    if v < 0:
+        raise ConfigError(f"$NATSCENE_JOB_OVERHEAD_MB={env!r} must be >= 0")
+    return v
 
 
 # ------------------------------------------------------------------------------------------ machine
