@@ -105,7 +105,7 @@ def volpath_agreement(transport):
 
 def main():
     from natscene.fit.keyframe import fit_keyframe
-    from natscene.scatter.allorders import AllOrdersSettings
+    from natscene.scatter.allorders import settings_from_config
     from natscene.scatter.render import render
     from natscene.scatter.tables import precompute
     from natscene.variant import select_variant
@@ -117,9 +117,7 @@ def main():
     result = {"volume": "cumulus", "view": "kite", "resolution": [camera.width, camera.height],
               "grid": {"sigma_t": pre["sigma_t"], "g": pre["g"]}}
     for transport in TRANSPORTS:
-        ao = pre.get("all_orders") or {}
-        st = AllOrdersSettings(**{k: (tuple(v) if isinstance(v, list) else v) for k, v in ao.items()},
-                               step_voxels=pre["step_voxels"], supersample=pre["supersample"])
+        st = settings_from_config(pre)
         t0 = time.perf_counter()
         tables = precompute(vol, camera, sun, sigmas=pre["sigma_t"], gs=pre["g"], n_m=pre["n_m"], spp=pre["spp"],
                             seed=pre["seed"], step_voxels=pre["step_voxels"], supersample=pre["supersample"],

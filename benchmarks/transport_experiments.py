@@ -37,16 +37,14 @@ def stats(x):
 
 
 def tables_for(transport, cfg, vol, camera, sun):
-    from natscene.scatter.allorders import AllOrdersSettings
+    from natscene.scatter.allorders import settings_from_config
     from natscene.scatter.tables import load_tables, precompute, save_tables
     d = ROOT / "results" / "benchmarks" / "tables" / transport
     try:
         return load_tables(d)
     except Exception:  # noqa: BLE001 - not there yet: compute and keep them
         pre = cfg["precompute"]
-        ao = pre.get("all_orders") or {}
-        st = AllOrdersSettings(**{k: (tuple(v) if isinstance(v, list) else v) for k, v in ao.items()},
-                               step_voxels=pre["step_voxels"], supersample=pre["supersample"])
+        st = settings_from_config(pre)
         tb = precompute(vol, camera, sun, sigmas=pre["sigma_t"], gs=pre["g"], n_m=pre["n_m"], spp=pre["spp"],
                         seed=pre["seed"], transport=transport, all_orders=st, skylight=pre.get("skylight"), log=print)
         d.mkdir(parents=True, exist_ok=True)

@@ -7,7 +7,7 @@ from natscene.runner import run
 
 
 def main(snakemake, log):
-    from natscene.scatter.allorders import AllOrdersSettings
+    from natscene.scatter.allorders import settings_from_config
     from natscene.scatter.contact import contact_sheet
     from natscene.scatter.tables import precompute, save_tables
     from natscene.variant import select_variant
@@ -20,9 +20,7 @@ def main(snakemake, log):
     camera = Camera.from_view(view)
     sun = sun_direction(view["sun"]["azimuth"], view["sun"]["elevation"])
     transport = cfg["transport"]
-    ao = cfg.get("all_orders") or {}
-    settings = AllOrdersSettings(**{k: (tuple(v) if isinstance(v, list) else v) for k, v in ao.items()},
-                                 step_voxels=cfg["step_voxels"], supersample=cfg["supersample"])
+    settings = settings_from_config(cfg)
     detail = (f"n_m={cfg['n_m']}, {cfg['spp']} spp" if transport == "dobashi" else
               f"{settings.sun_collisions:.3g} + {settings.sky_collisions:.3g} photon collisions per node")
     log.info(f"precompute {snakemake.wildcards.volume} x {snakemake.wildcards.view}: {camera.width}x{camera.height}, "

@@ -17,8 +17,11 @@ For one view (camera + sun), one sigma_t and one g this module computes, with ph
 
 Low orders vary over a mean free path near the lit surface and are cached in cells of ``fine_voxels``;
 bands from order 5 on are smooth (they have diffused over several transport mean free paths) and use
-cells of ``coarse_voxels``. Each cache is smoothed along the surface seen by the camera (a cross-bilateral
-kernel guided by the cells' optical depth toward the camera, :func:`natscene.scatter.inscatter.cache_radiance`).
+cells of ``coarse_voxels``. Every tally is weighted by the camera transmittance of its voxel
+(:func:`natscene.scatter.inscatter.visibility`), so a cell holds the in-scattered radiance of the part
+of it the camera sees (:func:`natscene.scatter.inscatter.cache_fields`). With ``guide_width`` > 0 a cache is
+smoothed along the surface seen by the camera (a cross-bilateral local-linear fit guided by the cells' optical
+depth toward the camera).
 
 Effort goes where the variance is: the number of photons is set from a collision budget (a short pilot run
 measures the collisions per photon at this sigma_t, g), because the noise of a cell falls with the
@@ -48,12 +51,22 @@ class AllOrdersSettings:
     coarse_voxels: int = 4
     guide_width: tuple = (0.0, 0.0)      # optical depth, fine and coarse cache (0: no smoothing)
     max_order: int = 4096
+    tally_rate: float = 1.0               # tally samples per voxel length at least, along every flight in cloud
     sun_bands: tuple = SUN_BANDS
     sky_bands: tuple = SKY_BANDS
     majorant_voxels: int = 4
     step_voxels: float = 0.5
     supersample: int = 4
     p_ground: float = 0.25
+
+
+def settings_from_config(precompute: dict) -> AllOrdersSettings:
+    """The settings of a validated ``precompute`` config section: its ``all_orders`` keys plus the march's
+    ``step_voxels`` and ``supersample`` (:func:`natscene.config.settings_from_section`)."""
+    from natscene.config import settings_from_section
+    section = dict(precompute.get("all_orders") or {})
+    section.update({k: precompute[k] for k in ("step_voxels", "supersample") if k in precompute})
+    return settings_from_section(AllOrdersSettings, section, "precompute.all_orders")
 
 
 @dataclass
@@ -89,7 +102,6 @@ class Scene:
     the cells' density integrals."""
 
     def __init__(self, volume, lighting: Lighting, settings: AllOrdersSettings):
-        from natscene.scatter.inscatter import cell_density_integrals
         from natscene.scatter.majorant import majorant_grid
         from natscene.scatter.medium import make_medium
         from natscene.scatter.photons import SkySource, SunBeam
@@ -102,9 +114,26 @@ class Scene:
         self.sky = (SkySource(lighting.dome, *self.bounds, p_ground=settings.p_ground)
                     if lighting.dome is not None else None)
         self.factors = (int(settings.fine_voxels), int(settings.coarse_voxels))
-        self.density_integrals = {f: cell_density_integrals(volume.density, f) for f in set(self.factors)}
         self.voxel_volume = float(np.prod(volume.voxel_size))
         self._depth = {}
+        self._vox_depth = {}
+
+    def camera_depth_voxels(self, camera) -> np.ndarray:
+        """The voxels' optical depth to the camera (:func:`natscene.scatter.inscatter.voxel_camera_depth`),
+        marched once per camera position."""
+        from natscene.scatter.inscatter import voxel_camera_depth
+        key = tuple(float(x) for x in camera.position)
+        if key not in self._vox_depth:
+            self._vox_depth[key] = voxel_camera_depth(self.med, camera.position)
+        return self._vox_depth[key]
+
+    def weighted_integrals(self, voxel_integrals: np.ndarray, sigma: float, factor: int) -> np.ndarray:
+        """Q(cell) = ∫_cell w sigma_t dV for cells of ``factor`` voxels, from the voxels' ∫rho w dV / voxel
+        volume (:func:`natscene.scatter.inscatter.weighted_voxel_integrals`): the denominator of the cache's
+        ratio (:func:`natscene.scatter.inscatter.cache_fields`)."""
+        from natscene.scatter.inscatter import block_sum
+        sig_k = sigma * self.volume.extinction_scale
+        return block_sum(voxel_integrals, factor) * (sig_k * self.voxel_volume)
 
     def camera_depth(self, camera, factor: int) -> np.ndarray:
         """∫rho from each cache cell to the camera (cached per camera position and cell size)."""
@@ -133,19 +162,19 @@ def _caches(scene: Scene, bands) -> tuple:
     return tuple(out)
 
 
-def _images(scene: Scene, camera, sigma: float, halves, bands, channels: int) -> np.ndarray:
+def _images(scene: Scene, camera, sigma: float, halves, bands, channels: int, voxel_integrals) -> np.ndarray:
     """(2 halves, channels, bands, H, W) images of the two halves' tallies."""
-    from natscene.scatter.inscatter import cache_radiance, gather
+    from natscene.scatter.inscatter import cache_fields, gather
     st = scene.settings
     sig_k = sigma * scene.volume.extinction_scale
     out = np.zeros((2, channels, len(bands), camera.height, camera.width), np.float32)
     for ci, (f, sel) in enumerate(_caches(scene, bands)):
         width = st.guide_width[0 if f == scene.factors[0] and ci == 0 else 1]
         guide = scene.camera_depth(camera, f) * sig_k
-        caches = [cache_radiance(h.numerators[ci], scene.density_integrals[f], sig_k, scene.voxel_volume,
-                                 guide=guide, guide_width=width) for h in halves]
-        stack = np.concatenate([c.reshape(-1, *c.shape[2:]) for c in caches])   # (2 * ch * nsel, cz, cy, cx)
-        E = gather(scene.med, camera, sigma, stack, f, st.step_voxels, st.supersample, scene.bounds)
+        q = scene.weighted_integrals(voxel_integrals, sigma, f)
+        fields = [cache_fields(h.numerators[ci], q, guide=guide, guide_width=width) for h in halves]
+        stack = np.concatenate([c.reshape(-1, *c.shape[2:]) for c, _ in fields])   # (2 * ch * nsel, cz, cy, cx)
+        E = gather(scene.med, camera, sigma, stack, fields[0][1], f, st.step_voxels, st.supersample, scene.bounds)
         out[:, :, sel] = E.reshape(2, channels, len(sel), camera.height, camera.width)
     return out
 
@@ -164,11 +193,12 @@ def photons_for(scene: Scene, source, sigma: float, g: float, camera, collisions
 
 
 def _trace_halves(scene: Scene, source, sigma: float, g: float, camera, n_photons: int, bands, k_min: int,
-                  seed: int):
+                  seed: int, camera_depth):
     """Two independent halves of the photons, each tallied into the fine and the coarse cache."""
     from natscene.scatter.photons import trace
     return [trace(scene.med, scene.grid, source, sigma, g, camera.position, max(1, n_photons // 2), bands,
-                  caches=_caches(scene, bands), seed=seed * 2 + h, max_order=scene.settings.max_order, k_min=k_min)
+                  caches=_caches(scene, bands), seed=seed * 2 + h, max_order=scene.settings.max_order, k_min=k_min,
+                  camera_depth=camera_depth, tally_rate=scene.settings.tally_rate)
             for h in range(2)]
 
 
@@ -192,10 +222,13 @@ def view_images(scene: Scene, camera, sigma: float, g: float, seed: int = 0) -> 
         return ViewImages(np.zeros((2, nb_sun, H, W), np.float32), sky, np.ones(nb_sun),
                           None if sky is None else np.ones(nb_sky), {})
     stats = {}
+    from natscene.scatter.inscatter import weighted_voxel_integrals
+    depth = scene.camera_depth_voxels(camera)
+    vint = weighted_voxel_integrals(scene.med, depth, sigma * scene.volume.extinction_scale)
     n_sun = photons_for(scene, scene.sun, sigma, g, camera, st.sun_collisions, 10 ** 9, seed,
                         most=st.sun_photons_max)
-    sun_halves = _trace_halves(scene, scene.sun, sigma, g, camera, n_sun, st.sun_bands, 2, seed)
-    sun_img = _images(scene, camera, sigma, sun_halves, st.sun_bands, 1)[:, 0]
+    sun_halves = _trace_halves(scene, scene.sun, sigma, g, camera, n_sun, st.sun_bands, 2, seed, depth)
+    sun_img = _images(scene, camera, sigma, sun_halves, st.sun_bands, 1, vint)[:, 0]
     stats.update(sun_photons=int(sum(h.photons for h in sun_halves)),
                  sun_collisions=int(sum(h.collisions for h in sun_halves)),
                  sun_truncated=float(max(h.truncated for h in sun_halves)))
@@ -203,8 +236,8 @@ def view_images(scene: Scene, camera, sigma: float, g: float, seed: int = 0) -> 
     if scene.sky is not None:
         n_sky = photons_for(scene, scene.sky, sigma, g, camera, st.sky_collisions, 10 ** 9, seed + 7919,
                             most=st.sky_photons_max)
-        sky_halves = _trace_halves(scene, scene.sky, sigma, g, camera, n_sky, st.sky_bands, 1, seed + 7919)
-        sky_img = _images(scene, camera, sigma, sky_halves, st.sky_bands, 4)
+        sky_halves = _trace_halves(scene, scene.sky, sigma, g, camera, n_sky, st.sky_bands, 1, seed + 7919, depth)
+        sky_img = _images(scene, camera, sigma, sky_halves, st.sky_bands, 4, vint)
         sky_r = fit_ratios(st.sky_bands, sum(h.histogram for h in sky_halves))
         stats.update(sky_photons=int(sum(h.photons for h in sky_halves)),
                      sky_collisions=int(sum(h.collisions for h in sky_halves)))

@@ -1,18 +1,22 @@
 """The in-scatter cache: from photon tallies to the light each pixel sees (all-orders transport).
 
-A tally C_b(cell) of :mod:`.photons` estimates ∫_cell sigma_t(x) S_b(x) dV, S_b the in-scattered radiance
-toward the camera of the orders of band b. The ratio estimator
+A tally C_b(cell) of :mod:`.photons` estimates ∫_cell w(x) sigma_t(x) S_b(x) dV, S_b the in-scattered radiance
+toward the camera of the orders of band b and w the visibility weight of the voxel holding x
+(:func:`visibility_weights`: the camera transmittance averaged over the voxel). The ratio estimator
 
-    S_b(cell) = C_b(cell) / ∫_cell sigma_t(x) dV
+    S_b(cell) = C_b(cell) / Q(cell),    Q(cell) = Σ_{v∈cell} w_v sigma_t ∫_v rho dV,
 
-gives the sigma_t-weighted mean of S_b over the cell. The denominator is integrated exactly for the
-trilinear density the photons collide with (per axis, the integral of each voxel's hat function over the
-cell), not from the voxel values: at the cloud's edge, where the trilinear density spills half a voxel
-outside the last dense voxel, the voxel sum misplaces the collisions and biased the edge by several per
-cent against Mitsuba. Cells no photon can reach (no density) take the value of the nearest cell with
-density, so that the trilinear lookup at the cloud's edge does not blend in zeros.
+gives the mean of S_b over the cell weighted by w sigma_t, the weighting of a view ray's integrand (Eq. 5:
+T_cam sigma_t S). Unweighted, a cell several mean free paths deep averaged S over its whole depth while the
+camera sees only its first mean free path; near the lit surface S changes over that distance, and the thick
+clouds' high orders came out up to 10 % (mean) and 48 % (8x8 blocks) too bright against Mitsuba. Because w
+is constant per voxel, Q is exact: ∫_v rho dV is integrated for the trilinear density the photons collide
+with (per axis, the integral of each voxel's hat function over the voxel), so any positive w gives a
+consistent weighted mean; w only has to favour what the camera sees.
 
-The view march (Eq. 5's integral with the cache's S_b in place of the sun term) integrates each segment
+The view march (Eq. 5's integral with the cache's S_b in place of the sun term) interpolates C_b and Q
+trilinearly and divides after the interpolation (normalised interpolation: a cell with little visible
+density weighs in by the little it holds, a cell without density not at all), and integrates each segment
 exactly for a density constant over it, as :mod:`.single`:
 
     E_b(q) = Σ_segments T_prev (1 - exp(-sigma_t k rho_i h)) S_b(x_i),
@@ -30,36 +34,6 @@ import mitsuba as mi
 from natscene.scatter.medium import ray_box_dr
 from natscene.scatter.rays import camera_rays, pixel_mean
 from natscene.scatter.single import one_minus_exp
-
-
-def _axis_weights(n_vox: int, factor: int, sub: int = 16) -> np.ndarray:
-    """(n_cells, n_vox): ∫ over cell c (voxels [c f, (c + 1) f)) of voxel v's trilinear hat, in voxel units.
-
-    The texture is cell-centred with clamped addressing (Mitsuba's ``Texture3f``), so the edge voxels' hats
-    reach the box faces."""
-    n_cells = -(-n_vox // factor)
-    x = (np.arange(n_cells * factor * sub) + 0.5) / sub          # midpoints of sub-intervals, voxel units
-    u = np.clip(x - 0.5, 0.0, n_vox - 1)
-    i0 = np.floor(u).astype(np.int64)
-    f = u - i0
-    i1 = np.minimum(i0 + 1, n_vox - 1)
-    inside = x < n_vox
-    cell = (x // factor).astype(np.int64)
-    W = np.zeros((n_cells, n_vox))
-    np.add.at(W, (cell[inside], i0[inside]), (1.0 - f[inside]) / sub)
-    np.add.at(W, (cell[inside], i1[inside]), f[inside] / sub)
-    return W
-
-
-def cell_density_integrals(density: np.ndarray, factor: int) -> np.ndarray:
-    """∫_cell rho dV / voxel volume for cells of ``factor`` voxels, exact for the trilinear density."""
-    d = np.asarray(density, np.float64)
-    nz, ny, nx = d.shape
-    Wz, Wy, Wx = (_axis_weights(n, factor) for n in (nz, ny, nx))
-    out = np.tensordot(Wz, d, axes=(1, 0))                     # (cz, ny, nx)
-    out = np.tensordot(out, Wy, axes=(1, 1))                   # (cz, nx, cy)
-    out = np.tensordot(out, Wx, axes=(1, 1))                   # (cz, cy, cx)
-    return out
 
 
 def camera_depth(med, camera_position, factor: int) -> np.ndarray:
@@ -80,32 +54,119 @@ def camera_depth(med, camera_position, factor: int) -> np.ndarray:
     return np.asarray(depth, np.float64).reshape(cz, cy, cx)
 
 
-def cache_radiance(numerators: np.ndarray, density_integrals: np.ndarray, sig_k: float, voxel_volume: float,
-                   guide: np.ndarray | None = None, guide_width: float = 0.0, floor: float = 1e-7) -> np.ndarray:
-    """S (..., cz, cy, cx) float32 from tallies (..., cz, cy, cx): the ratio C / (sig_k ∫rho dV).
+def voxel_camera_depth(med, camera_position, step_voxels: float = 1.0) -> np.ndarray:
+    """D_cam at every voxel centre, float32 [nz, ny, nx]: ∫ rho ds (world units) from the voxel centre to the
+    camera (or to the box face on the way), marched only within two voxels of density (where a photon can
+    collide, with the trilinear lookup's support); elsewhere 0."""
+    from scipy.ndimage import binary_dilation
+    from natscene.scatter.medium import _march_depth
+    d = np.asarray(med.volume.density)
+    nz, ny, nx = d.shape
+    live = binary_dilation(d > 0, iterations=2)
+    iz, iy, ix = np.nonzero(live)
+    vox = (med.bbox_max - med.bbox_min) / np.array([nx, ny, nz])
+    out = np.zeros(d.shape, np.float32)
+    if iz.size == 0:
+        return out
+    pts = med.bbox_min + (np.stack([ix, iy, iz], -1) + 0.5) * vox
+    o = mi.Point3f(*[pts[:, i].astype(np.float32) for i in range(3)])
+    cam = mi.ScalarPoint3f(*[float(e) for e in camera_position])
+    to_cam = cam - o
+    dist = dr.norm(to_cam)
+    dvec = to_cam / dr.maximum(dist, 1e-30)
+    _, t1 = ray_box_dr(o, dvec, med.bbox_min, med.bbox_max)
+    depth = _march_depth(med, o, dvec, dr.minimum(dr.maximum(t1, 0.0), dist), med.voxel * step_voxels)
+    out[iz, iy, ix] = np.asarray(depth, np.float32)
+    return out
+
+
+def depth_texture(depth_vox: np.ndarray):
+    """The voxel-centred D_cam as a trilinear ``mi.Texture3f`` (the visibility weight's lookup)."""
+    return mi.Texture3f(mi.TensorXf(np.ascontiguousarray(np.asarray(depth_vox, np.float32)[..., None])))
+
+
+def visibility(depth_tex, uvw, sig_k: float):
+    """w(x) = exp(-sig_k D̃(x)): the camera transmittance at texture coordinates ``uvw``, D̃ the trilinear
+    interpolation of the voxel-centred D_cam (:func:`voxel_camera_depth`). The weight of every tally
+    (:mod:`.photons`) and of the cache's denominator (:func:`weighted_voxel_integrals`)."""
+    return dr.exp(-sig_k * depth_tex.eval(uvw)[0])
+
+
+#: Gauss-Legendre nodes (2 per half voxel, in voxel units from the voxel's low corner): each half voxel lies
+#: inside one patch of the cell-centred trilinear textures, where the integrand is smooth
+_GL = np.array([0.25 - 0.25 / np.sqrt(3.0), 0.25 + 0.25 / np.sqrt(3.0), 0.75 - 0.25 / np.sqrt(3.0),
+                0.75 + 0.25 / np.sqrt(3.0)])
+
+
+def weighted_voxel_integrals(med, depth_vox: np.ndarray, sig_k: float, chunk: int = 1 << 17) -> np.ndarray:
+    """∫_v rho(x) w(x) dV / voxel volume for every voxel v, float64 [nz, ny, nx], w the visibility
+    (:func:`visibility`).
+
+    4 x 4 x 4 Gauss-Legendre nodes per voxel (2 per half voxel and axis, :data:`_GL`): exact for the trilinear
+    density alone, and within 0.2 % for a transmittance that falls by e^-3 across a voxel. Voxels the camera
+    cannot see (w < 1e-8 everywhere in them) and voxels without density near them are left 0 (their tallies
+    are weighted below 1e-8 too)."""
+    from scipy.ndimage import binary_dilation, maximum_filter
+    d = np.asarray(med.volume.density, np.float32)
+    nz, ny, nx = d.shape
+    out = np.zeros(d.shape, np.float64)
+    reach = sig_k * (np.asarray(depth_vox, np.float64) - maximum_filter(d, size=3) * 2.0 * med.voxel)
+    live = binary_dilation(d > 0, iterations=1) & (reach < 18.5)
+    iz, iy, ix = np.nonzero(live)
+    if iz.size == 0:
+        return out
+    tex = depth_texture(depth_vox)
+    gl = mi.Float(_GL.astype(np.float32))
+    for c0 in range(0, iz.size, chunk):
+        sel = slice(c0, min(c0 + chunk, iz.size))
+        n = iz[sel].size
+        k = dr.arange(mi.UInt32, n * 64)
+        v, o = k // 64, k % 64
+        ox, oy, oz = dr.gather(mi.Float, gl, o % 4), dr.gather(mi.Float, gl, (o // 4) % 4), dr.gather(mi.Float, gl, o // 16)
+        uvw = mi.Point3f((mi.Float(dr.gather(mi.UInt32, mi.UInt32(ix[sel].astype(np.uint32)), v)) + ox) / nx,
+                         (mi.Float(dr.gather(mi.UInt32, mi.UInt32(iy[sel].astype(np.uint32)), v)) + oy) / ny,
+                         (mi.Float(dr.gather(mi.UInt32, mi.UInt32(iz[sel].astype(np.uint32)), v)) + oz) / nz)
+        f = dr.maximum(med.density_tex.eval(uvw)[0], 0.0) * visibility(tex, uvw, sig_k)
+        out[iz[sel], iy[sel], ix[sel]] = np.asarray(dr.block_sum(f, 64), np.float64) / 64.0
+    return out
+
+
+def block_sum(values: np.ndarray, factor: int) -> np.ndarray:
+    """Sums of ``values`` (..., nz, ny, nx) over cells of ``factor``^3 voxels (the last cells padded)."""
+    v = np.asarray(values, np.float64)
+    nz, ny, nx = v.shape[-3:]
+    cz, cy, cx = -(-nz // factor), -(-ny // factor), -(-nx // factor)
+    pad = [(0, 0)] * (v.ndim - 3) + [(0, cz * factor - nz), (0, cy * factor - ny), (0, cx * factor - nx)]
+    v = np.pad(v, pad)
+    v = v.reshape(v.shape[:-3] + (cz, factor, cy, factor, cx, factor))
+    return v.sum(axis=(-5, -3, -1))
+
+
+def cache_fields(numerators: np.ndarray, weighted_integrals: np.ndarray, guide: np.ndarray | None = None,
+                 guide_width: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """(numerators, denominators) float32 of the cache, both divided by the largest denominator.
+
+    ``numerators`` (..., cz, cy, cx): the tallies C_b (:mod:`.photons`), each weighted by the visibility w;
+    ``weighted_integrals`` (cz, cy, cx): ∫_cell w sigma_t dV (:func:`weighted_voxel_integrals`).
+    The in-scattered radiance is their ratio, S = C / Q; :func:`gather` interpolates C and Q separately and
+    divides after the interpolation (normalised interpolation), so that a cell with little visible density
+    weighs in by the little it holds, and a cell without density not at all.
 
     With ``guide`` (cz, cy, cx; the cells' optical depth toward the camera) and ``guide_width`` > 0, S is
     smoothed by a 3x3x3 cross-bilateral local-linear fit (:func:`_local_linear`): a [1, 2, 1] tent in space
     times exp(-(Δguide)² / (2 guide_width²)), so that it averages cells at the same optical depth from the
-    camera (along the visible surface) but not across depth, where S changes over a mean free path near the
-    surface. The fit is local-linear, not a weighted mean: a weighted mean of S pulls the cells at the
-    cloud's edge toward the denser interior (the weights are the cells' ∫rho), which brightened thin clouds
-    by 5-20 % against Mitsuba; a local plane has no such first-order bias. Cells without density take the value of the nearest cell with density (``floor`` times the
-    largest ∫rho), so the trilinear lookup at the cloud's edge blends in no zeros.
+    camera (along the visible surface) but not across depth. The fit is local-linear, not a weighted mean: a
+    weighted mean of S pulls the cells at the cloud's edge toward the denser interior, which brightened thin
+    clouds by 5-20 % against Mitsuba; a local plane has no such first-order bias.
     """
-    from scipy.ndimage import distance_transform_edt
     num = np.asarray(numerators, np.float64)
-    den = np.asarray(density_integrals, np.float64)
+    den = np.asarray(weighted_integrals, np.float64)
     if guide is not None and guide_width > 0:
         num, den = _local_linear(num, den, np.asarray(guide, np.float64), float(guide_width))
-    D = den * (sig_k * voxel_volume)
-    ok = den > floor * den.max()
-    S = np.zeros(num.shape, np.float64)
-    S[..., ok] = num[..., ok] / D[ok]
-    if (~ok).any() and ok.any():
-        _, ind = distance_transform_edt(~ok, return_indices=True)
-        S = S[..., ind[0], ind[1], ind[2]]
-    return S.astype(np.float32)
+    top = float(den.max()) if den.size else 0.0
+    if top <= 0:
+        return np.zeros(num.shape, np.float32), np.zeros(den.shape, np.float32)
+    return (num / top).astype(np.float32), (den / top).astype(np.float32)
 
 
 @dr.syntax
@@ -123,16 +184,18 @@ def _march(med, tex, nch: int, o, d, sig_k: float, step: float, lo, cache_ext, b
         a = one_minus_exp(sig_k * r * h)
         if r > 0:
             s = tex.eval((p - lo) / cache_ext)
+            q = trans * a / dr.maximum(s[nch], 1e-30)
             for j in range(nch):
-                acc[j] += trans * a * s[j]
+                acc[j] += q * s[j]
         trans *= 1.0 - a
         i += 1.0
     return acc
 
 
-def gather(med, camera, sigma: float, caches: np.ndarray, factor: int, step_voxels: float = 0.5,
-           supersample: int = 4, bounds=None) -> np.ndarray:
-    """E (C, H, W) float32: the view integral of each of the C cache fields ``caches`` (C, cz, cy, cx).
+def gather(med, camera, sigma: float, caches: np.ndarray, denominators: np.ndarray, factor: int,
+           step_voxels: float = 0.5, supersample: int = 4, bounds=None) -> np.ndarray:
+    """E (C, H, W) float32: the view integral of the C cache fields S = ``caches`` / ``denominators``
+    ((C, cz, cy, cx) and (cz, cy, cx), :func:`cache_fields`), each interpolated trilinearly before the division.
 
     ``bounds``: (lo, hi) world box the march is limited to (where the density is non-zero; default the
     volume's box)."""
@@ -146,10 +209,11 @@ def gather(med, camera, sigma: float, caches: np.ndarray, factor: int, step_voxe
     vox = (med.bbox_max - med.bbox_min) / np.array([nx, ny, nz])
     cache_ext = mi.ScalarVector3f(*[float(e) for e in vox * factor * np.array([cx, cy, cz])])
     lo = mi.ScalarPoint3f(*[float(e) for e in med.bbox_min])
-    tex = mi.Texture3f(mi.TensorXf(np.ascontiguousarray(np.moveaxis(caches, 0, -1))))
+    fields = np.concatenate([caches, np.asarray(denominators, np.float32)[None]])
+    tex = mi.Texture3f(mi.TensorXf(np.ascontiguousarray(np.moveaxis(fields, 0, -1))))
     box_lo, box_hi = bounds if bounds is not None else (med.bbox_min, med.bbox_max)
     o, d, _ = camera_rays(camera, supersample, stratified=supersample > 1)
-    acc = _march(med, tex, C, o, d, float(sigma) * med.scale, med.voxel * step_voxels, lo, cache_ext,
+    acc = _march(med, tex, C, o, d, dr.opaque(mi.Float, float(sigma) * med.scale), med.voxel * step_voxels, lo, cache_ext,
                  np.asarray(box_lo, np.float64), np.asarray(box_hi, np.float64))
     return np.stack([pixel_mean(a, supersample, W, H) for a in acc])
 

@@ -92,11 +92,20 @@ def _dda_state(p, w, t, grid: MajorantGrid):
 
 
 @dr.syntax
-def free_flight(med, grid: MajorantGrid, p, w, sig_k: float, rng, active):
+def free_flight(med, grid: MajorantGrid, p, w, sig_k: float, rng, active, tally=None, rate_floor: float = 0.0):
     """Delta tracking from ``p`` along unit ``w`` inside the volume box: (distance, collided).
 
     ``sig_k`` = sigma_t · extinction_scale (mu_t = sig_k · rho). Lanes that leave the box return
     collided = False.
+
+    ``tally(x, ratio, mask)``, if given, is called at every tentative collision x (real or null) with
+    ratio = mu_t(x) / mu_bar(x): the tentative collisions are a Poisson process of rate mu_bar along the flight,
+    each surviving to x with the transmittance T(x), so Σ ratio f(x) over them is an unbiased estimate of the
+    flight's track integral ∫ T(s) mu_t(x(s)) f(x(s)) ds (the expected-value estimator of delta tracking; it
+    takes a sample wherever the majorant puts a tentative collision, also where real collisions are rare).
+    ``rate_floor`` (1/world units) raises every non-empty cell's majorant to at least that rate: more null
+    collisions, so that thin cloud, where few real collisions happen, still gets tally samples along each
+    flight (the flight's distribution is unchanged: any majorant >= mu_t samples it exactly).
     """
     t0, t1 = ray_box_dr(p, w, med.bbox_min, med.bbox_max)
     cx, cy, cz = grid.shape
@@ -131,11 +140,14 @@ def free_flight(med, grid: MajorantGrid, p, w, sig_k: float, rng, active):
         tmx, tmy, tmz = dr.select(skip, jtx, tmx), dr.select(skip, jty, tmy), dr.select(skip, jtz, tmz)
         flat = mi.UInt32((iz * cy + iy) * cx + ix)
         m = dr.gather(mi.Float, grid.dr_values, flat, running) * sig_k
+        m = dr.select(m > 0, dr.maximum(m, rate_floor), m)
         t_next = dr.minimum(dr.minimum(dr.minimum(tmx, tmy), tmz), t1)
         seg = dr.maximum(t_next - t, 0.0)
         inside = running & (m * seg > tau)
         tc = t + tau / dr.maximum(m, 1e-30)
         r = med.rho(p + w * tc)
+        if tally is not None:
+            tally(p + w * tc, sig_k * r / dr.maximum(m, 1e-30), inside)
         accept = inside & (rng.next_float32() * m < sig_k * r)
         hit |= accept
         # a rejected tentative collision restarts the exponential from tc in the same cell

@@ -217,52 +217,81 @@ def _scatter_dir(w, g: float, rng):
     return dr.normalize(mi.Frame3f(w).to_world(mi.Vector3f(sin_t * dr.cos(phi), sin_t * dr.sin(phi), cos_t)))
 
 
-def _tally_lanes(p, w, k, g, wts, accs, hist, slot_tabs, cam, lo, ext, res, caches, max_order):
-    """Per-lane tally (orders differ between lanes): each cache takes the lanes whose band it holds."""
-    val = hg_dr(dr.dot(w, dr.normalize(cam - p)), g)
-    kk = dr.minimum(k, max_order)
+def _visibility(vis, p, lo, ext, res):
+    """The visibility weight w(p) (:func:`natscene.scatter.inscatter.visibility`); 1 without a camera depth.
+    ``vis``: (depth texture, sig_k) or None."""
+    if vis is None:
+        return mi.Float(1.0)
+    from natscene.scatter.inscatter import visibility
+    return visibility(vis[0], (p - lo) / ext, vis[1])
+
+
+def _histogram(p, w, k, g, wts, hist, cam, lo, ext, res, max_order, vis):
+    """The light of each exact order (whole cloud), per lane: the collision estimator at the k-th collision."""
+    val = hg_dr(dr.dot(w, dr.normalize(cam - p)), g) * _visibility(vis, p, lo, ext, res)
     tot = mi.Float(0.0)
     for c in range(len(wts)):
         tot += val * wts[c]
-    for ci, (factor, dims, ncell) in enumerate(caches):
-        slot = dr.gather(mi.Int32, slot_tabs[ci], kk)
-        idx = mi.UInt32(dr.maximum(slot, 0)) * ncell + _cache_index(p, lo, ext, res, factor, dims)
-        for c in range(len(wts)):
-            dr.scatter_reduce(dr.ReduceOp.Add, accs[ci][c], _fixed(val * wts[c]), idx, slot >= 0)
-    dr.scatter_reduce(dr.ReduceOp.Add, hist, _fixed(tot), kk)
+    dr.scatter_reduce(dr.ReduceOp.Add, hist, _fixed(tot), dr.minimum(k, max_order))
+
+
+def _segment_tally(k, w, g, wts, accs, slot_tabs, cam, lo, ext, res, caches, max_order, vis):
+    """The tally of a flight toward the photon's k-th collision (per lane k): at each tentative collision x,
+    ratio · p(w · ω_cam(x), g) · w_vis(x) · Φ into the cache cell of x, band of order k (the light that scatters
+    at x toward the camera after k - 1 scatterings on the way)."""
+    kk = dr.minimum(k, max_order)
+    slots = [dr.gather(mi.Int32, slot_tabs[ci], kk) for ci in range(len(caches))]
+
+    def tally(x, ratio, mask):
+        val = ratio * hg_dr(dr.dot(w, dr.normalize(cam - x)), g) * _visibility(vis, x, lo, ext, res)
+        for ci, (factor, dims, ncell) in enumerate(caches):
+            idx = mi.UInt32(dr.maximum(slots[ci], 0)) * ncell + _cache_index(x, lo, ext, res, factor, dims)
+            for c in range(len(wts)):
+                dr.scatter_reduce(dr.ReduceOp.Add, accs[ci][c], _fixed(val * wts[c]), idx, mask & (slots[ci] >= 0))
+    return tally
 
 
 @dr.syntax
-def _walk_tail(med, grid, p, w, wts, k0: int, sig_k: float, g: float, rng, accs, hist, slot_tabs, cam, lo, ext,
-               res, caches, max_order: int, k_min: int):
+def _walk_tail(med, grid, p, w, wts, k0: int, sig_k, g, rng, accs, hist, slot_tabs, cam, lo, ext,
+               res, caches, max_order: int, k_min: int, vis, floor):
     """Finish the walks of the surviving photons (after their k0-th collision) in one symbolic loop."""
-    k = dr.full(mi.UInt32, k0, dr.width(p))
+    k = dr.opaque(mi.UInt32, k0, dr.width(p))
     alive = dr.full(mi.Bool, True, dr.width(p))
     count = mi.UInt32(0)
     while dr.hint(alive, include=[rng]):
         w = _scatter_dir(w, g, rng)
-        t, hit = free_flight(med, grid, p, w, sig_k, rng, alive)
+        seg = _segment_tally(k + 1, w, g, wts, accs, slot_tabs, cam, lo, ext, res, caches, max_order, vis)
+        t, hit = free_flight(med, grid, p, w, sig_k, rng, alive, tally=seg, rate_floor=floor)
         alive &= hit
         p = dr.select(alive, mi.Point3f(p + w * t), p)
         k += 1
         count += dr.select(alive, 1, 0)
         if alive & (k >= k_min):
-            _tally_lanes(p, w, k, g, wts, accs, hist, slot_tabs, cam, lo, ext, res, caches, max_order)
+            _histogram(p, w, k, g, wts, hist, cam, lo, ext, res, max_order, vis)
         alive &= k < max_order
     return alive, count
 
 
 def trace(med, grid: MajorantGrid, source, sigma: float, g: float, camera_position, n_photons: int, bands,
           caches=((2, None),), seed: int = 0, max_order: int = 4096, k_min: int = 2, batch: int = 2 ** 20,
-          progress=None) -> InscatterTally:
+          progress=None, camera_depth=None, tally_rate: float = 0.0) -> InscatterTally:
     """Trace ``n_photons`` from ``source`` through the medium at (sigma, g) and tally the in-scatter caches.
 
     ``caches``: (factor, band indices or None = all bands) per cache; every band goes to exactly one cache.
+    ``camera_depth``: the voxel-centred optical depth to the camera [nz, ny, nx]
+    (:func:`natscene.scatter.inscatter.voxel_camera_depth`): each tally is weighted by the camera transmittance
+    w(x) = exp(-sigma_t k D̃(x)) (:func:`natscene.scatter.inscatter.visibility`); None: 1 everywhere.
+    ``tally_rate``: tentative collisions (tally samples) per voxel length at least, in every non-empty majorant
+    cell (:func:`natscene.scatter.majorant.free_flight`'s ``rate_floor``).
     """
     density = med.volume.density
     nz, ny, nx = density.shape
     res = (nx, ny, nz)
     nb = len(bands)
+    vis = None
+    if camera_depth is not None:
+        from natscene.scatter.inscatter import depth_texture
+        vis = (depth_texture(camera_depth), dr.opaque(mi.Float, float(sigma) * med.scale))
     band_sets, geo, slot_np = [], [], []
     owner = -np.ones(nb, np.int64)
     for ci, (factor, sel) in enumerate(caches):
@@ -288,8 +317,11 @@ def trace(med, grid: MajorantGrid, source, sigma: float, g: float, camera_positi
             for ci in range(len(caches))]
     hist = dr.zeros(mi.UInt64, max_order + 1)
     unit = None     # photon power that one fixed-point unit of FIXED stands for (the first batch's mean)
-    sig_k = float(sigma) * med.scale
-    g = float(g)
+    # sigma_t, g and the tally rate enter the kernels as opaque values (not literals), so that every (sigma_t, g)
+    # node of a precompute reuses the same compiled kernels instead of compiling its own
+    sig_k = dr.opaque(mi.Float, float(sigma) * med.scale)
+    floor = dr.opaque(mi.Float, float(tally_rate) / float(med.voxel))
+    g = dr.opaque(mi.Float, float(g))
     cam = mi.ScalarPoint3f(*[float(e) for e in camera_position])
     lo = _vec(med.bbox_min)
     ext = _vec(med.bbox_max - med.bbox_min)
@@ -311,21 +343,21 @@ def trace(med, grid: MajorantGrid, source, sigma: float, g: float, camera_positi
         while True:
             if k > 0:
                 w = _scatter_dir(w, g, rng)
-            t, hit = free_flight(med, grid, p, w, sig_k, rng, alive)
+            seg = (_segment_tally(dr.opaque(mi.UInt32, k + 1, dr.width(p)), w, g, wts, accs, slot_tabs, cam, lo, ext,
+                                  res, geo, max_order, vis) if k + 1 >= k_min else None)
+            t, hit = free_flight(med, grid, p, w, sig_k, rng, alive, tally=seg,
+                                 rate_floor=floor if seg is not None else 0.0)
             alive &= hit
             p = dr.select(alive, mi.Point3f(p + w * t), p)
             k += 1
             kk = min(k, max_order)
             if k >= k_min:
-                val = dr.select(alive, hg_dr(dr.dot(w, dr.normalize(cam - p)), g), 0.0)
-                ci = int(owner[tab[kk]])
-                factor, dims, ncell = geo[ci]
-                idx = int(slot_np[ci][kk]) * ncell + _cache_index(p, lo, ext, res, factor, dims)
+                val = dr.select(alive, hg_dr(dr.dot(w, dr.normalize(cam - p)), g)
+                                * _visibility(vis, p, lo, ext, res), 0.0)
                 tot = mi.Float(0.0)
                 for c in range(nch):
-                    dr.scatter_reduce(dr.ReduceOp.Add, accs[ci][c], _fixed(val * wts[c]), idx, alive)
                     tot += val * wts[c]
-                dr.scatter_reduce(dr.ReduceOp.Add, hist, dr.sum(_fixed(tot)), kk)
+                dr.scatter_reduce(dr.ReduceOp.Add, hist, dr.sum(_fixed(tot)), dr.opaque(mi.UInt32, kk))
             dr.eval(p, w, alive, rng, *wts, *[a for acc in accs for a in acc], hist)
             n_alive = int(dr.count(alive)[0])
             collisions += n_alive
@@ -347,7 +379,7 @@ def trace(med, grid: MajorantGrid, source, sigma: float, g: float, camera_positi
                 dr.eval(p, w, rng, *wts)
             if width <= max(2048, n // 64):
                 alive, count = _walk_tail(med, grid, p, w, wts, k, sig_k, g, rng, accs, hist, slot_tabs, cam, lo,
-                                          ext, res, geo, max_order, k_min)
+                                          ext, res, geo, max_order, k_min, vis, floor)
                 dr.eval(*[a for acc in accs for a in acc], hist, alive, count)
                 truncated += dr.sum(dr.select(alive, sum(wts), 0.0))
                 collisions += int(dr.sum(count)[0])

@@ -38,13 +38,16 @@ def render(volume, camera, sun_dir, params: dict, sky, orders: int = 4, spp: int
            step_voxels: float = 0.5, supersample: int = 4, rho_threshold: float = 0.01,
            batch_spp: int | None = None, return_components: bool = False, transport: str = "all_orders",
            sky_settings: dict | None = None, dome=None, ground_albedo=DEFAULT_GROUND_ALBEDO,
-           sun_collisions: int | None = None, sky_collisions: int | None = None, skylight: bool = True):
+           sun_collisions: int | None = None, sky_collisions: int | None = None, skylight: bool = True,
+           all_orders=None):
     """L_cg (H, W, 3) for one parameter set (scalars; c_in and kappa_a (3,)).
 
     ``sky``: (H, W, 3) linear L_sky at the camera's resolution (or a constant (3,) colour).
     ``return_components``: also return a dict with L_s, L_m, L_b, T, t_c, footprint (all_orders: L_m holds
     every order >= 2 of the sun's light and L_sky_lit the skylight's). ``skylight=False``: the sun alone
-    lights the cloud (all_orders; e.g. to compare with a sun-only reference).
+    lights the cloud (all_orders; e.g. to compare with a sun-only reference). ``all_orders``: an
+    :class:`natscene.scatter.allorders.AllOrdersSettings` to start from (cache cells, tally rate...); the
+    step, supersampling and collision arguments override it.
     """
     from natscene.scatter.medium import make_medium
     from natscene.scatter.single import march_view
@@ -76,7 +79,9 @@ def render(volume, camera, sun_dir, params: dict, sky, orders: int = 4, spp: int
         from natscene.scatter.allorders import AllOrdersSettings, Lighting, Scene, view_images
         from natscene.scatter.bands import band_weights
         from natscene.scatter.skylight import ground_radiance, irradiance
-        st = AllOrdersSettings(step_voxels=step_voxels, supersample=supersample)
+        from dataclasses import replace
+        st = replace(all_orders if all_orders is not None else AllOrdersSettings(), step_voxels=step_voxels,
+                     supersample=supersample)
         if sun_collisions is not None:
             st.sun_collisions = int(sun_collisions)
         if sky_collisions is not None:
