@@ -1,18 +1,19 @@
 """The in-scatter cache: from photon tallies to the light each pixel sees (all-orders transport).
 
 A tally C_b(cell) of :mod:`.photons` estimates ∫_cell w(x) sigma_t(x) S_b(x) dV, S_b the in-scattered radiance
-toward the camera of the orders of band b and w the visibility weight of the voxel holding x
-(:func:`visibility_weights`: the camera transmittance averaged over the voxel). The ratio estimator
+toward the camera of the orders of band b and w(x) = exp(-sigma_t k D̃(x)) the camera transmittance
+(:func:`visibility`; D̃ the trilinear interpolation of the voxels' optical depth to the camera). The ratio
+estimator
 
-    S_b(cell) = C_b(cell) / Q(cell),    Q(cell) = Σ_{v∈cell} w_v sigma_t ∫_v rho dV,
+    S_b(cell) = C_b(cell) / Q(cell),    Q(cell) = ∫_cell w sigma_t dV,
 
 gives the mean of S_b over the cell weighted by w sigma_t, the weighting of a view ray's integrand (Eq. 5:
 T_cam sigma_t S). Unweighted, a cell several mean free paths deep averaged S over its whole depth while the
 camera sees only its first mean free path; near the lit surface S changes over that distance, and the thick
-clouds' high orders came out up to 10 % (mean) and 48 % (8x8 blocks) too bright against Mitsuba. Because w
-is constant per voxel, Q is exact: ∫_v rho dV is integrated for the trilinear density the photons collide
-with (per axis, the integral of each voxel's hat function over the voxel), so any positive w gives a
-consistent weighted mean; w only has to favour what the camera sees.
+clouds' high orders came out up to 10 % (mean) and 48 % (8x8 blocks) too bright against Mitsuba. Any positive
+weight gives a consistent weighted mean as long as the tallies and Q use the same one, so Q must be exact:
+:func:`weighted_voxel_integrals` integrates the trilinear density times w per voxel by Gauss-Legendre nodes
+inside each trilinear patch.
 
 The view march (Eq. 5's integral with the cache's S_b in place of the sun term) interpolates C_b and Q
 trilinearly and divides after the interpolation (normalised interpolation: a cell with little visible

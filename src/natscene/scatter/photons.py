@@ -3,20 +3,24 @@
 Photons enter the cloud as a parallel beam from the sun (:class:`SunBeam`) or from a direction of the sky
 dome (:class:`SkySource`), travel by delta tracking through mu_t = sigma_t k rho (:mod:`.majorant`) and
 scatter by Henyey–Greenstein(g) with albedo 1 (the albedo enters the composition as beta^k, :mod:`.bands`).
-At the k-th collision x_k (the photon arrives there after k - 1 scatterings) the photon's contribution to
-the light that scatters at x_k toward the camera is tallied in a voxel cache:
+Along the flight toward the k-th collision (the photon has scattered k - 1 times) the photon's contribution to
+the light that scatters toward the camera is tallied in a voxel cache at every tentative collision x of delta
+tracking:
 
-    C_b(cell) += Φ p(ω_k · ω_cam(x_k), g)        for k in band b,
+    C_b(cell) += Φ (mu_t(x) / mu_bar(x)) p(ω · ω_cam(x), g) w(x)        for k in band b,
 
-Φ the photon's power, ω_k its direction, ω_cam(x) the unit vector from x toward the camera. The collision
-density of an analog walk is sigma_t(x) L(x, ω), so C_b(cell) estimates ∫_cell sigma_t(x) S_b(x) dV, S_b the
-in-scattered radiance toward the camera of the orders of band b (:mod:`.inscatter` divides by ∫ sigma_t).
-This is a collision estimator of the radiance field (Spanier & Gelbard 1969; the volume photon map of
-Jensen & Christensen 1998 without its density kernel), shared by every pixel that looks at the cell.
+Φ the photon's power, ω its direction, ω_cam(x) the unit vector from x toward the camera, w(x) the camera
+transmittance (:func:`natscene.scatter.inscatter.visibility`). The tentative collisions are a Poisson process of
+rate mu_bar along the flight, each reached with the transmittance, so C_b(cell) estimates
+∫_cell w(x) sigma_t(x) S_b(x) dV, S_b the in-scattered radiance toward the camera of the orders of band b
+(:mod:`.inscatter` divides by ∫ w sigma_t). It is the expected-value (track-length-like) estimator of delta
+tracking (Spanier & Gelbard 1969; the volume photon map of Jensen & Christensen 1998 without its density kernel),
+shared by every pixel that looks at the cell; ``tally_rate`` keeps a floor of tentative collisions per voxel
+length in thin cloud, where real collisions are rare.
 
-The sun's first collision (order 1) is not tallied: single scattering is ray-marched exactly (Eq. 5).
-The sky's photons are tallied from order 1. A histogram of the tallied light per exact order (whole cloud)
-gives each band's order distribution (:func:`natscene.scatter.bands.fit_ratios`).
+The sun's first flight (order 1) is not tallied: single scattering is ray-marched exactly (Eq. 5). The sky's
+photons are tallied from their first flight. A histogram of the light per exact order (whole cloud, weighted by
+w, collision estimator at the real collisions) gives each band's order distribution (:func:`natscene.scatter.bands.fit_ratios`).
 
 Walks run wavefront-style (one Dr.Jit kernel per bounce, dead photons compacted away) while many photons
 are alive, then the long tail of survivors finishes in one symbolic loop.
