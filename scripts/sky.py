@@ -4,7 +4,7 @@ import numpy as np
 from natscene import io
 from natscene.config import settings_from_section
 from natscene.runner import run
-from natscene.sky import SkySettings, extract_sky
+from natscene.sky.extract import SkySettings, extract_sky
 from natscene.sky.extract import preview_panels
 from natscene.sky.segmentation import decode_hand_mask
 
