@@ -24,7 +24,7 @@ sys.path.insert(0, str(ROOT / "src"))
 import cv2  # noqa: E402
 
 from natscene import io  # noqa: E402
-from natscene.sky import extract_sky  # noqa: E402
+from natscene.sky.extract import extract_sky  # noqa: E402
 from natscene.sky.extract import preview_panels  # noqa: E402
 from natscene.sky.laplace import solve_laplace  # noqa: E402
 from natscene.sky.resample import area_resample, resample_labels  # noqa: E402

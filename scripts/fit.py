@@ -6,13 +6,14 @@ import numpy as np
 from natscene import io
 from natscene.fit.keyframe import fit_keyframe
 from natscene.fit.report import contact_sheet, convergence_csv, convergence_plot
+from natscene.fit.settings import fit_settings
 from natscene.runner import run
 from natscene.scatter.tables import load_tables
 
 
 def main(snakemake, log):
     inp, out, par = snakemake.input, snakemake.output, snakemake.params
-    kf, settings = par.keyframe, par.settings
+    kf, settings = par.keyframe, fit_settings(par.settings)
     tables = load_tables(Path(inp.meta).parent)
     photo = io.read_exr(inp.photo).channel("R", "G", "B")
     label = io.read_exr(inp.mask).channel("label")
@@ -36,11 +37,11 @@ def main(snakemake, log):
                         "params": [[c.values[p] for p in names] for c in res.ranked],
                         "param_names": list(names)}, stage="fit")
     labels = [f"#{i + 1} O={c.objective:.3f}" for i, c in enumerate(res.ranked)]
-    io.write_png(out.sheet, contact_sheet(photo, list(images), labels, columns=settings.get("contact_columns", 4)),
+    io.write_png(out.sheet, contact_sheet(photo, list(images), labels, columns=settings.contact_columns),
                  encoded=True)
     io.write_text(out.csv, convergence_csv(res.best_history, res.mean_history))
     convergence_plot(out.plot, res.best_history, res.mean_history,
-                     title=f"{par.name}: {params['method']} ({res.reason})", epsilon_o=settings.get("epsilon_O"))
+                     title=f"{par.name}: {params['method']} ({res.reason})", epsilon_o=settings.epsilon_o)
     log.info(f"chosen rank {kf.get('rank', 1)}: " + ", ".join(f"{p}={params['chosen'][p]:.4g}" for p in names)
              + f", kappa_a={params['chosen']['kappa_a']}")
 

@@ -1,10 +1,12 @@
 """Rule `sky`: sky extraction from one photo (Dobashi 2012 §4.1). Thin: read, call natscene.sky, write."""
+from pathlib import Path
+
 import numpy as np
 
 from natscene import io
-from natscene.config import settings_from_section
+from natscene.config import relative_to_root, settings_from_section
 from natscene.runner import run
-from natscene.sky import SkySettings, extract_sky
+from natscene.sky.extract import SkySettings, extract_sky
 from natscene.sky.extract import preview_panels
 from natscene.sky.segmentation import decode_hand_mask
 
@@ -30,7 +32,7 @@ def main(snakemake, log):
              f"({summary['thresholds']['saturation_source']}), cloud {px['cloud']} px, sky {px['sky']} px, "
              f"neither {px['neither']} px, Laplace unknowns {px['solved']}; c_in = "
              f"[{', '.join(f'{c:.4f}' for c in res.sun.c_in)}]")
-    attrs = {"photo": str(photo_path), "name": name, "c_in": res.sun.c_in, "settings": summary["settings"]}
+    attrs = {"photo": relative_to_root(photo_path, Path(snakemake.scriptdir).parent), "name": name, "c_in": res.sun.c_in, "settings": summary["settings"]}
     io.write_exr(snakemake.output.photo, res.photo, ["R", "G", "B"], attrs=attrs, stage="sky")
     io.write_exr(snakemake.output.mask, np.stack([res.labels.astype(np.float32), res.alpha], -1),
                  ["label", "alpha"], attrs={**attrs, "labels": "0 sky, 1 cloud, 2 neither"}, stage="sky")

@@ -1,7 +1,9 @@
 """Rule `tileset`: GA-optimised ω-tile set from an example texture (Dong 2007 Ch. 5)."""
+from pathlib import Path
+
 import numpy as np
 
-from natscene.config import settings_from_section
+from natscene.config import relative_to_root, settings_from_section
 from natscene.errors import InputError
 from natscene.io import read_photo, write_exr, write_png, write_yaml
 from natscene.runner import run
@@ -69,7 +71,7 @@ def main(snakemake, log):
                    "merged_sources": [list(v) for v in b.extra["sources"][j]]}
                   for j, (t, lab) in enumerate(zip(ts.as_tuples(), ts.labels()))],
         "patches": {c: b.ga.genes[i] for i, c in enumerate(ts.colours)},
-        "example": str(snakemake.input.example), "example_size": [W, H],
+        "example": relative_to_root(snakemake.input.example, Path(snakemake.scriptdir).parent), "example_size": [W, H],
         "seams": dict(seams),
         "ga": {"params": vars(params), "seed": int(spec["seed"]), "E": b.ga.E,
                "initial_best_E": b.ga.initial_best_E, "initial_mean_E": b.ga.initial_mean_E,

@@ -8,6 +8,8 @@ import pytest
 
 from natscene.config import bundle_schema, settings_from_section
 from natscene.errors import ConfigError
+from natscene.fit.genetic import DEFAULT_RANGES
+from natscene.fit.settings import FitSettings, GradientSettings, KappaGridSettings, fit_settings
 from natscene.leaves.season import SeasonParams
 from natscene.scatter.allorders import AllOrdersSettings
 from natscene.sky.extract import SkySettings
@@ -28,6 +30,9 @@ PAIRS = [
     (AllOrdersSettings, "precompute.schema.yaml", ["all_orders"], set(),
      {"step_voxels": ("precompute.schema.yaml", []), "supersample": ("precompute.schema.yaml", [])},
      {"majorant_voxels", "p_ground", "sun_bands", "sky_bands"}),
+    (FitSettings, "fit.schema.yaml", [], {"kappa", "gradient"}, {}, {"kappa", "gradient"}),
+    (KappaGridSettings, "fit.schema.yaml", ["kappa"], set(), {}, set()),
+    (GradientSettings, "fit.schema.yaml", ["gradient"], set(), {}, set()),
 ]
 # patterns.*.rd (RDParams) and volumes.* (natscene.volume.procedural.Shape) have no per-key schema defaults on
 # purpose: their defaults depend on a preset / the cloud kind (Dong's Table 3.3 rows, the kinds' shapes), and an
@@ -77,3 +82,17 @@ def test_settings_from_section_names_unknown_keys_and_converts():
     lim = settings_from_section(PlausibilityLimits, {"sun_cct_k": [1000, 3000]}, "sky.checks")
     assert lim.sun_cct_k == (1000, 3000) and isinstance(lim.sun_cct_k, tuple)
     assert settings_from_section(SkySettings, None, "sky") == SkySettings()
+
+
+def test_fit_settings_read_nested_sections_and_ranges_default_to_the_schema():
+    """fit.kappa and fit.gradient become their dataclasses, epsilon_O its field, unknown keys name their path;
+    the GA's default ranges (natscene.fit.genetic.DEFAULT_RANGES) are the schema's defaults of fit.ranges."""
+    st = fit_settings({"epsilon_O": 0.3, "kappa": {"max": 0.5}, "gradient": {"h": 0.02}})
+    assert (st.epsilon_o, st.kappa, st.gradient.h, st.gradient.n_alpha) == (0.3, KappaGridSettings(max=0.5), 0.02, 10)
+    assert fit_settings(None) == FitSettings()
+    with pytest.raises(ConfigError, match=r"'fit\.kappa\.top'"):
+        fit_settings({"kappa": {"top": 1.0}})
+    with pytest.raises(ConfigError, match=r"'fit\.pop'"):
+        fit_settings({"pop": 3})
+    ranges = _section("fit.schema.yaml", ["ranges"])["properties"]
+    assert {k: tuple(v["default"]) for k, v in ranges.items()} == DEFAULT_RANGES

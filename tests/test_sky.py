@@ -8,7 +8,7 @@ import pytest
 from natscene import io
 from natscene.color import LUMA_709
 from natscene.errors import InputError
-from natscene.sky import SkySettings, extract_sky
+from natscene.sky.extract import SkySettings, extract_sky
 from natscene.sky.laplace import laplace_residual, solve_laplace
 from natscene.sky.resample import area_resample, crop_box, resample_labels
 from natscene.sky.segmentation import AUTO, CLOUD, NEITHER, SKY, decode_hand_mask, soft_alpha

@@ -11,7 +11,7 @@ import pytest
 from natscene import io
 from natscene.config import settings_from_section
 from natscene.errors import InputError
-from natscene.sky import SkySettings, extract_sky
+from natscene.sky.extract import SkySettings, extract_sky
 from natscene.sky.plausibility import PlausibilityLimits, findings, measure
 
 ROOT = Path(__file__).resolve().parents[1]

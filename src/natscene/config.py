@@ -121,6 +121,17 @@ def resolve_path(path: str | os.PathLike, root: str | os.PathLike) -> str:
     return str(p if p.is_absolute() else Path(root) / p)
 
 
+def relative_to_root(path: str | os.PathLike, root: str | os.PathLike) -> str:
+    """The inverse of :func:`resolve_path` for metadata: an input path under the repository ``root`` as the config
+    writes it (relative, POSIX), any other path absolute. Products that record their inputs so stay the same bytes
+    in every checkout of the repository."""
+    p = Path(os.path.abspath(os.path.expanduser(str(path))))
+    try:
+        return p.relative_to(Path(os.path.abspath(root))).as_posix()
+    except ValueError:
+        return str(p)
+
+
 def settings_from_section(cls, section: dict | None, key: str):
     """A settings dataclass ``cls`` from a validated config section: the one way the library turns config into
     settings.

@@ -135,7 +135,7 @@ def reference_distance(camera_position, volume_meta: str) -> float:
 def build_set(entry: dict, frame: int, results: str, root: str, shot_cfg: dict | None = None,
               sun_c_in=None) -> SetSpec:
     """The set of frame ``frame`` of a composite (``shot_cfg``: the validated ``shots.<shot>`` entry)."""
-    origin = np.asarray(entry.get("origin", [0.0, 0.0, 0.0]), np.float64)
+    origin = np.asarray(entry["origin"], np.float64)
     sun_cfg = dict(entry["sun"])
     atmosphere = None
     if entry.get("shot"):
@@ -161,7 +161,7 @@ def build_set(entry: dict, frame: int, results: str, root: str, shot_cfg: dict |
         W, H = entry["resolution"]
         cc = entry["camera"]
         cam = Camera(tuple(np.subtract(cc["position"], origin)), tuple(np.subtract(cc["look_at"], origin)),
-                     tuple(cc.get("up", (0, 1, 0))), float(cc.get("fov", 40)), int(W), int(H))
+                     tuple(cc["up"]), float(cc["fov"]), int(W), int(H))
         plate = load_image(entry["background"], frame, results, root, (H, W), "background")[..., :3]
         if plate.shape[:2] != (H, W):
             plate = cv2.resize(plate.astype(np.float32), (W, H), interpolation=cv2.INTER_AREA).astype(np.float64)

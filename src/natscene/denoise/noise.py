@@ -1,4 +1,4 @@
-"""The noise figure of a rendered frame (issue 18, "Measure grain this way").
+"""The noise figure of a rendered frame (docs/stages/shots.md, "Noise figure").
 
 Render the same frame twice with different random seeds, a and b. Over the cloud pixels (luminance Y, Rec. 709
 weights)

@@ -15,13 +15,15 @@ from natscene.fit.gradient import gradient_descent
 from natscene.fit.kappa import kappa_grid
 from natscene.fit.objective import Levels
 from natscene.fit.problem import FitProblem
+from natscene.fit.settings import FitSettings, fit_settings
 from natscene.errors import InputError
 
 
-def effective_ranges(settings: dict, tables, log=None) -> dict:
+def effective_ranges(settings: dict | FitSettings, tables, log=None) -> dict:
     """The configured ranges, with g and sigma_t clipped to the tables' grids (no data outside them)."""
+    settings = settings if isinstance(settings, FitSettings) else fit_settings(settings)
     names = fit_params(getattr(tables, "transport", "dobashi"))
-    ranges = {p: tuple(float(x) for x in settings.get("ranges", {}).get(p, DEFAULT_RANGES[p])) for p in names}
+    ranges = {p: tuple(float(x) for x in settings.ranges.get(p, DEFAULT_RANGES[p])) for p in names}
     for p, (lo, hi) in ranges.items():
         if hi < lo:
             raise InputError(f"config key 'fit.ranges.{p}': max {hi} is below min {lo}")
@@ -39,15 +41,18 @@ def effective_ranges(settings: dict, tables, log=None) -> dict:
     return ranges
 
 
-def fit_keyframe(tables, photo, photo_cloud, sky, c_in, settings: dict, seed: int = 0, rank: int = 1,
-                 method: str | None = None, log=None, compose_cloud=None, apply_atmosphere=None) -> dict:
-    """Fit one keyframe. Returns {result, problem, ranges, images (k, H, W, 3), chosen, params (yaml dict)}."""
+def fit_keyframe(tables, photo, photo_cloud, sky, c_in, settings: dict | FitSettings, seed: int = 0,
+                 rank: int = 1, method: str | None = None, log=None, compose_cloud=None,
+                 apply_atmosphere=None) -> dict:
+    """Fit one keyframe. ``settings``: the ``fit`` config section (or its :class:`FitSettings`).
+    Returns {result, problem, ranges, images (k, H, W, 3), chosen, params (yaml dict)}."""
     log = log or (lambda msg: None)
-    method = method or settings.get("method", "ga")
-    kap = settings.get("kappa", {})
-    if kap.get("max", 1.0) < kap.get("min", 0.0):
+    st = settings if isinstance(settings, FitSettings) else fit_settings(settings)
+    method = method or st.method
+    kap = st.kappa
+    if kap.max < kap.min:
         raise InputError("config key 'fit.kappa': max is below min")
-    levels = Levels(settings.get("n_levels", 256), settings.get("encoding", "srgb"))
+    levels = Levels(st.n_levels, st.encoding)
     transport = getattr(tables, "transport", "dobashi")
     fixed = {}
     if transport == "all_orders":
@@ -56,17 +61,16 @@ def fit_keyframe(tables, photo, photo_cloud, sky, c_in, settings: dict, seed: in
         if view_mean is None:
             raise InputError("the precompute's meta.yaml has no skylight.view_mean_rgb; rerun the precompute rule")
         fixed = {"sky_scale": calibration(np.asarray(sky, np.float64).reshape(-1, 3).mean(0), view_mean),
-                 "ground_albedo": np.broadcast_to(np.asarray(settings.get("ground_albedo", 0.2), np.float64), (3,))}
-        if not settings.get("skylight", True):        # the sun alone lights the cloud
+                 "ground_albedo": np.broadcast_to(np.asarray(st.ground_albedo, np.float64), (3,))}
+        if not st.skylight:        # the sun alone lights the cloud
             fixed = {"sky_scale": np.zeros(3), "ground_albedo": np.zeros(3)}
         log(f"all-orders transport: the sky dome calibrated to the photo's L_sky by "
             f"{np.round(fixed['sky_scale'], 4).tolist()}, ground albedo {fixed['ground_albedo'].tolist()}")
     problem = FitProblem(tables, sky, photo, photo_cloud, c_in, levels=levels,
-                         metric=settings.get("metric", "difference"),
-                         kappas=kappa_grid(kap.get("min", 0.0), kap.get("max", 1.0), kap.get("step", 0.1)),
+                         metric=st.metric, kappas=kappa_grid(kap.min, kap.max, kap.step),
                          compose_cloud=compose_cloud, apply_atmosphere=apply_atmosphere, fixed=fixed)
     names = problem.names
-    ranges = effective_ranges(settings, tables, log)
+    ranges = effective_ranges(st, tables, log)
     log(f"{problem.n_pixels} synthetic cloud pixels, {int(np.asarray(photo_cloud).sum())} photo cloud pixels, "
         f"method {method}")
 
@@ -76,18 +80,14 @@ def fit_keyframe(tables, photo, photo_cloud, sky, c_in, settings: dict, seed: in
 
     t0 = time.perf_counter()
     if method == "ga":
-        result = run_ga(problem, ranges, population=settings.get("population", 20), bits=settings.get("bits", 32),
-                        crossover_rate=settings.get("crossover_rate", 0.8),
-                        mutation_rate=settings.get("mutation_rate", 0.02),
-                        scaling=settings.get("scaling", "linear"), epsilon_o=settings.get("epsilon_O", 0.5),
-                        n_suc=settings.get("n_suc", 20), n_max=settings.get("n_max", 100),
-                        top_k=settings.get("top_k", 10), distinct_tol=settings.get("distinct_tol", 0.01),
-                        seed=seed, progress=progress, names=names)
+        result = run_ga(problem, ranges, population=st.population, bits=st.bits, crossover_rate=st.crossover_rate,
+                        mutation_rate=st.mutation_rate, scaling=st.scaling, epsilon_o=st.epsilon_o, n_suc=st.n_suc,
+                        n_max=st.n_max, top_k=st.top_k, distinct_tol=st.distinct_tol, seed=seed, progress=progress,
+                        names=names)
     elif method == "gradient":
-        gs = settings.get("gradient", {})
-        result = gradient_descent(problem, ranges, h=gs.get("h", 0.01), alpha0=gs.get("alpha0", 0.25),
-                                  n_alpha=gs.get("n_alpha", 10), max_iter=gs.get("max_iter", 100),
-                                  epsilon_o=settings.get("epsilon_O", 0.5), seed=seed, progress=progress,
+        gs = st.gradient
+        result = gradient_descent(problem, ranges, h=gs.h, alpha0=gs.alpha0, n_alpha=gs.n_alpha,
+                                  max_iter=gs.max_iter, epsilon_o=st.epsilon_o, seed=seed, progress=progress,
                                   names=names)
     else:
         raise InputError(f"config key 'fit.method': unknown method {method!r} (ga or gradient)")

@@ -1,4 +1,4 @@
-"""Mitsuba 3 reference of the Mie/isotropic shading (issue 10 "Reference"; Reimschuessel 2011, Ch. 3).
+"""Mitsuba 3 reference of the Mie/isotropic shading (Reimschuessel 2011, Ch. 3).
 
 The same cloud, sun and camera as :func:`natscene.mie.march.render_mie`, rendered by path tracing
 (``volpath``) with the phase function the point-cloud solution implies:

@@ -12,7 +12,7 @@
 - :mod:`natscene.sky.extract`: the whole stage on one photo;
 - :mod:`natscene.sky.daylight`: the Preetham et al. (1999) daylight sky and a shot's sky (the sky behind shot
   frames, the dome that lights the clouds and the composite's set).
-"""
-from natscene.sky.extract import SkyResult, SkySettings, extract_sky
 
-__all__ = ["SkyResult", "SkySettings", "extract_sky"]
+The package imports none of its modules: ``natscene.sky.daylight`` (used by the cloud renderer) loads without
+the photo stage's image libraries.
+"""
