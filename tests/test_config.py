@@ -4,7 +4,7 @@ from pathlib import Path
 
 import pytest
 
-from natscene.config import bundle_schema, load_yaml_config, validate_config
+from natscene.config import bundle_schema, load_yaml_config, relative_to_root, resolve_path, validate_config
 from natscene.errors import ConfigError
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -56,3 +56,13 @@ def test_recolour_library_defaults_match_the_schema():
     cfg = validate_config({"recolour": {"x": {"photo": "p.jpg"}}}, SCHEMA)
     filled = {k: v for k, v in cfg["recolour"]["x"].items() if k != "photo"}
     assert filled == DEFAULTS
+
+
+def test_metadata_paths_are_relative_to_the_repository(tmp_path):
+    """relative_to_root undoes resolve_path for a path under the repository (what the config wrote, POSIX), and
+    keeps any other path absolute: products that record their inputs are the same bytes in every checkout."""
+    root = tmp_path / "checkout"
+    assert relative_to_root(resolve_path("resources/photos/a.jpg", root), root) == "resources/photos/a.jpg"
+    other = tmp_path / "elsewhere" / "b.png"
+    assert relative_to_root(other, root) == str(other)
+    assert relative_to_root(resolve_path(str(other), root), root) == str(other)
