@@ -98,8 +98,8 @@ class ViewImages:
 
 
 class Scene:
-    """The volume prepared once for a view: medium with the sun optical depth, majorant grid, emitters and
-    the cells' density integrals."""
+    """The volume prepared once for a view: medium with the sun optical depth, majorant grid, emitters, and
+    per camera position the voxels' optical depth to the camera."""
 
     def __init__(self, volume, lighting: Lighting, settings: AllOrdersSettings):
         from natscene.scatter.majorant import majorant_grid
@@ -115,7 +115,6 @@ class Scene:
                     if lighting.dome is not None else None)
         self.factors = (int(settings.fine_voxels), int(settings.coarse_voxels))
         self.voxel_volume = float(np.prod(volume.voxel_size))
-        self._depth = {}
         self._vox_depth = {}
 
     def camera_depth_voxels(self, camera) -> np.ndarray:
@@ -134,14 +133,6 @@ class Scene:
         from natscene.scatter.inscatter import block_sum
         sig_k = sigma * self.volume.extinction_scale
         return block_sum(voxel_integrals, factor) * (sig_k * self.voxel_volume)
-
-    def camera_depth(self, camera, factor: int) -> np.ndarray:
-        """∫rho from each cache cell to the camera (cached per camera position and cell size)."""
-        from natscene.scatter.inscatter import camera_depth
-        key = (tuple(float(x) for x in camera.position), factor)
-        if key not in self._depth:
-            self._depth[key] = camera_depth(self.med, camera.position, factor)
-        return self._depth[key]
 
 
 def _split(bands, up_to: int) -> tuple[list, list]:
@@ -170,7 +161,10 @@ def _images(scene: Scene, camera, sigma: float, halves, bands, channels: int, vo
     out = np.zeros((2, channels, len(bands), camera.height, camera.width), np.float32)
     for ci, (f, sel) in enumerate(_caches(scene, bands)):
         width = st.guide_width[0 if f == scene.factors[0] and ci == 0 else 1]
-        guide = scene.camera_depth(camera, f) * sig_k
+        guide = None
+        if width > 0:   # the cells' optical depth toward the camera: the mean of their voxels'
+            from natscene.scatter.inscatter import block_sum
+            guide = block_sum(scene.camera_depth_voxels(camera), f) / f ** 3 * sig_k
         q = scene.weighted_integrals(voxel_integrals, sigma, f)
         fields = [cache_fields(h.numerators[ci], q, guide=guide, guide_width=width) for h in halves]
         stack = np.concatenate([c.reshape(-1, *c.shape[2:]) for c, _ in fields])   # (2 * ch * nsel, cz, cy, cx)

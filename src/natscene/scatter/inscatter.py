@@ -37,24 +37,6 @@ from natscene.scatter.rays import camera_rays, pixel_mean
 from natscene.scatter.single import one_minus_exp
 
 
-def camera_depth(med, camera_position, factor: int) -> np.ndarray:
-    """∫ rho ds (world units) from each cell centre (cells of ``factor`` voxels) to the camera, (cz, cy, cx)."""
-    from natscene.scatter.medium import _march_depth
-    nz, ny, nx = med.volume.density.shape
-    cz, cy, cx = -(-nz // factor), -(-ny // factor), -(-nx // factor)
-    vox = (med.bbox_max - med.bbox_min) / np.array([nx, ny, nz])
-    axes = [med.bbox_min[i] + (np.arange(n) + 0.5) * factor * vox[i] for i, n in enumerate((cx, cy, cz))]
-    Z, Y, X = np.meshgrid(axes[2], axes[1], axes[0], indexing="ij")
-    o = mi.Point3f(X.ravel().astype(np.float32), Y.ravel().astype(np.float32), Z.ravel().astype(np.float32))
-    cam = mi.ScalarPoint3f(*[float(e) for e in camera_position])
-    to_cam = cam - o
-    dist = dr.norm(to_cam)
-    d = to_cam / dr.maximum(dist, 1e-30)
-    _, t1 = ray_box_dr(o, d, med.bbox_min, med.bbox_max)
-    depth = _march_depth(med, o, d, dr.minimum(dr.maximum(t1, 0.0), dist), med.voxel * 0.5)
-    return np.asarray(depth, np.float64).reshape(cz, cy, cx)
-
-
 def voxel_camera_depth(med, camera_position, step_voxels: float = 1.0) -> np.ndarray:
     """D_cam at every voxel centre, float32 [nz, ny, nx]: ∫ rho ds (world units) from the voxel centre to the
     camera (or to the box face on the way), marched only within two voxels of density (where a photon can
