@@ -221,7 +221,7 @@ def _scatter_dir(w, g: float, rng):
     return dr.normalize(mi.Frame3f(w).to_world(mi.Vector3f(sin_t * dr.cos(phi), sin_t * dr.sin(phi), cos_t)))
 
 
-def _visibility(vis, p, lo, ext, res):
+def _visibility(vis, p, lo, ext):
     """The visibility weight w(p) (:func:`natscene.scatter.inscatter.visibility`); 1 without a camera depth.
     ``vis``: (depth texture, sig_k) or None."""
     if vis is None:
@@ -230,13 +230,20 @@ def _visibility(vis, p, lo, ext, res):
     return visibility(vis[0], (p - lo) / ext, vis[1])
 
 
-def _histogram(p, w, k, g, wts, hist, cam, lo, ext, res, max_order, vis):
-    """The light of each exact order (whole cloud), per lane: the collision estimator at the k-th collision."""
-    val = hg_dr(dr.dot(w, dr.normalize(cam - p)), g) * _visibility(vis, p, lo, ext, res)
+def _collision_light(p, w, g, wts, cam, lo, ext, vis):
+    """The light a collision at p scatters toward the camera, all channels: Φ p(w · ω_cam, g) w_vis(p) (the
+    collision estimator of the order histogram)."""
+    val = hg_dr(dr.dot(w, dr.normalize(cam - p)), g) * _visibility(vis, p, lo, ext)
     tot = mi.Float(0.0)
     for c in range(len(wts)):
         tot += val * wts[c]
-    dr.scatter_reduce(dr.ReduceOp.Add, hist, _fixed(tot), dr.minimum(k, max_order))
+    return tot
+
+
+def _histogram(p, w, k, g, wts, hist, cam, lo, ext, max_order, vis):
+    """The light of each exact order (whole cloud), per lane: the collision estimator at the k-th collision."""
+    dr.scatter_reduce(dr.ReduceOp.Add, hist, _fixed(_collision_light(p, w, g, wts, cam, lo, ext, vis)),
+                      dr.minimum(k, max_order))
 
 
 def _segment_tally(k, w, g, wts, accs, slot_tabs, cam, lo, ext, res, caches, max_order, vis):
@@ -247,7 +254,7 @@ def _segment_tally(k, w, g, wts, accs, slot_tabs, cam, lo, ext, res, caches, max
     slots = [dr.gather(mi.Int32, slot_tabs[ci], kk) for ci in range(len(caches))]
 
     def tally(x, ratio, mask):
-        val = ratio * hg_dr(dr.dot(w, dr.normalize(cam - x)), g) * _visibility(vis, x, lo, ext, res)
+        val = ratio * hg_dr(dr.dot(w, dr.normalize(cam - x)), g) * _visibility(vis, x, lo, ext)
         for ci, (factor, dims, ncell) in enumerate(caches):
             idx = mi.UInt32(dr.maximum(slots[ci], 0)) * ncell + _cache_index(x, lo, ext, res, factor, dims)
             for c in range(len(wts)):
@@ -271,7 +278,7 @@ def _walk_tail(med, grid, p, w, wts, k0: int, sig_k, g, rng, accs, hist, slot_ta
         k += 1
         count += dr.select(alive, 1, 0)
         if alive & (k >= k_min):
-            _histogram(p, w, k, g, wts, hist, cam, lo, ext, res, max_order, vis)
+            _histogram(p, w, k, g, wts, hist, cam, lo, ext, max_order, vis)
         alive &= k < max_order
     return alive, count
 
@@ -356,11 +363,7 @@ def trace(med, grid: MajorantGrid, source, sigma: float, g: float, camera_positi
             k += 1
             kk = min(k, max_order)
             if k >= k_min:
-                val = dr.select(alive, hg_dr(dr.dot(w, dr.normalize(cam - p)), g)
-                                * _visibility(vis, p, lo, ext, res), 0.0)
-                tot = mi.Float(0.0)
-                for c in range(nch):
-                    tot += val * wts[c]
+                tot = dr.select(alive, _collision_light(p, w, g, wts, cam, lo, ext, vis), 0.0)
                 dr.scatter_reduce(dr.ReduceOp.Add, hist, dr.sum(_fixed(tot)), dr.opaque(mi.UInt32, kk))
             dr.eval(p, w, alive, rng, *wts, *[a for acc in accs for a in acc], hist)
             n_alive = int(dr.count(alive)[0])
