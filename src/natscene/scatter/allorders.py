@@ -17,7 +17,7 @@ For one view (camera + sun), one sigma_t and one g this module computes, with ph
 
 Low orders vary over a mean free path near the lit surface and are cached in cells of ``fine_voxels``;
 bands from order 5 on are smooth (they have diffused over several transport mean free paths) and use
-cells of ``coarse_voxels``. Every tally is weighted by the camera transmittance of its voxel
+cells of ``coarse_voxels``. Every tally is weighted by the camera transmittance at its point
 (:func:`natscene.scatter.inscatter.visibility`), so a cell holds the in-scattered radiance of the part
 of it the camera sees (:func:`natscene.scatter.inscatter.cache_fields`). With ``guide_width`` > 0 a cache is
 smoothed along the surface seen by the camera (a cross-bilateral local-linear fit guided by the cells' optical
