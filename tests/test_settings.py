@@ -29,7 +29,7 @@ PAIRS = [
     (SeasonParams, "leaves.schema.yaml", ["season"], set(), {}, set()),
     (AllOrdersSettings, "precompute.schema.yaml", ["all_orders"], set(),
      {"step_voxels": ("precompute.schema.yaml", []), "supersample": ("precompute.schema.yaml", [])},
-     {"majorant_voxels", "p_ground", "sun_bands", "sky_bands"}),
+     {"majorant_voxels", "p_ground", "sun_bands", "sky_bands", "window_voxels", "sky_lobe_g"}),
     (FitSettings, "fit.schema.yaml", [], {"kappa", "gradient"}, {}, {"kappa", "gradient"}),
     (KappaGridSettings, "fit.schema.yaml", ["kappa"], set(), {}, set()),
     (GradientSettings, "fit.schema.yaml", ["gradient"], set(), {}, set()),

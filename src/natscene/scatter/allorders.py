@@ -58,6 +58,12 @@ class AllOrdersSettings:
     step_voxels: float = 0.5
     supersample: int = 4
     p_ground: float = 0.25
+    importance: bool = True               # weight windows: split / roulette photons toward what the camera sees
+    importance_floor: float = 0.05        # the window's visibility far behind the visible skin (relative)
+    window_voxels: int = 4                # the window's cells
+    split_max: int = 8                    # most copies of one photon at one collision
+    sky_lobe_share: float = 0.2           # sky photons drawn from a lobe of directions toward the camera
+    sky_lobe_g: float = 0.7               # the lobe's HG asymmetry
 
 
 def settings_from_config(precompute: dict) -> AllOrdersSettings:
@@ -173,26 +179,54 @@ def _images(scene: Scene, camera, sigma: float, halves, bands, channels: int, vo
     return out
 
 
+def weight_window(scene: Scene, source, sigma: float, g: float, camera, seed: int, pilot: int = 65536):
+    """The weight window of ``source`` at (sigma, g) for ``camera`` (:mod:`natscene.scatter.importance`): a pilot
+    run tallies the forward flux (phase-free, first flight apart) in cells of ``window_voxels``; returns the
+    (factor, dims, targets) that :func:`natscene.scatter.photons.trace` takes."""
+    import mitsuba as mi
+    from natscene.scatter.importance import window_targets
+    from natscene.scatter.inscatter import block_sum
+    from natscene.scatter.photons import trace
+    st = scene.settings
+    f = int(st.window_voxels)
+    t = trace(scene.med, scene.grid, source, sigma, g, camera.position, pilot, ((1, 1), (2, None)),
+              caches=((f, None),), seed=seed + 65537, max_order=st.max_order, k_min=1,
+              tally_rate=st.tally_rate, phase=False)
+    tallies = t.numerators[0].sum(0)                        # (2 bands, cz, cy, cx): first flight, the rest
+    rho = np.asarray(scene.volume.density, np.float64)
+    mass = block_sum(rho, f)
+    w = np.exp(-sigma * scene.volume.extinction_scale * scene.camera_depth_voxels(camera).astype(np.float64))
+    occ = mass > 0
+    flux = np.where(occ, tallies.sum(0) / np.where(occ, mass, 1.0), 0.0)
+    vis = np.where(occ, block_sum(w * rho, f) / np.where(occ, mass, 1.0), 0.0)
+    thickness = sigma * scene.volume.extinction_scale * mass / f ** 2 * float(np.min(scene.volume.voxel_size))
+    targets = window_targets(flux, tallies[0], vis, occ, thickness, floor=st.importance_floor)
+    cz, cy, cx = targets.shape
+    return f, (cx, cy, cz), mi.Float(np.ascontiguousarray(targets).ravel())
+
+
 def photons_for(scene: Scene, source, sigma: float, g: float, camera, collisions: int, k_min: int,
-                seed: int, pilot: int = 32768, most: int | None = None) -> int:
-    """Photons that make about ``collisions`` collisions at (sigma, g) (a short pilot run measures the rate),
-    at most ``most``."""
+                seed: int, pilot: int = 32768, most: int | None = None, window=None) -> int:
+    """Photons that make about ``collisions`` collisions at (sigma, g) (a short pilot run measures the rate,
+    with the weight window ``window`` if any: splitting adds collisions, roulette removes them), at most
+    ``most``."""
     from natscene.scatter.photons import trace
     t = trace(scene.med, scene.grid, source, sigma, g, camera.position, pilot, ((1, None),),
               caches=((scene.factors[1], None),), seed=seed + 104729, max_order=scene.settings.max_order,
-              k_min=10 ** 9)
+              k_min=10 ** 9, window=window, split_max=scene.settings.split_max)
     per = max(t.collisions / pilot, 1e-3)
     n = int(min(max(collisions / per, 4 * pilot), 64 * collisions))
     return n if most is None else min(n, int(most))
 
 
 def _trace_halves(scene: Scene, source, sigma: float, g: float, camera, n_photons: int, bands, k_min: int,
-                  seed: int, camera_depth):
+                  seed: int, camera_depth, window=None):
     """Two independent halves of the photons, each tallied into the fine and the coarse cache."""
     from natscene.scatter.photons import trace
     return [trace(scene.med, scene.grid, source, sigma, g, camera.position, max(1, n_photons // 2), bands,
                   caches=_caches(scene, bands), seed=seed * 2 + h, max_order=scene.settings.max_order, k_min=k_min,
-                  camera_depth=camera_depth, tally_rate=scene.settings.tally_rate)
+                  camera_depth=camera_depth, tally_rate=scene.settings.tally_rate, window=window,
+                  split_max=scene.settings.split_max)
             for h in range(2)]
 
 
@@ -219,18 +253,23 @@ def view_images(scene: Scene, camera, sigma: float, g: float, seed: int = 0) -> 
     from natscene.scatter.inscatter import weighted_voxel_integrals
     depth = scene.camera_depth_voxels(camera)
     vint = weighted_voxel_integrals(scene.med, depth, sigma * scene.volume.extinction_scale)
+    win = weight_window(scene, scene.sun, sigma, g, camera, seed) if st.importance else None
     n_sun = photons_for(scene, scene.sun, sigma, g, camera, st.sun_collisions, 10 ** 9, seed,
-                        most=st.sun_photons_max)
-    sun_halves = _trace_halves(scene, scene.sun, sigma, g, camera, n_sun, st.sun_bands, 2, seed, depth)
+                        most=st.sun_photons_max, window=win, pilot=16384 if win else 32768)
+    sun_halves = _trace_halves(scene, scene.sun, sigma, g, camera, n_sun, st.sun_bands, 2, seed, depth, win)
     sun_img = _images(scene, camera, sigma, sun_halves, st.sun_bands, 1, vint)[:, 0]
     stats.update(sun_photons=int(sum(h.photons for h in sun_halves)),
                  sun_collisions=int(sum(h.collisions for h in sun_halves)),
                  sun_truncated=float(max(h.truncated for h in sun_halves)))
     sky_img = sky_r = None
     if scene.sky is not None:
-        n_sky = photons_for(scene, scene.sky, sigma, g, camera, st.sky_collisions, 10 ** 9, seed + 7919,
-                            most=st.sky_photons_max)
-        sky_halves = _trace_halves(scene, scene.sky, sigma, g, camera, n_sky, st.sky_bands, 1, seed + 7919, depth)
+        sky = (scene.sky.toward(camera.position, st.sky_lobe_g, st.sky_lobe_share) if st.sky_lobe_share > 0
+               else scene.sky)
+        win = weight_window(scene, sky, sigma, g, camera, seed + 7919) if st.importance else None
+        n_sky = photons_for(scene, sky, sigma, g, camera, st.sky_collisions, 10 ** 9, seed + 7919,
+                            most=st.sky_photons_max, window=win, pilot=16384 if win else 32768)
+        sky_halves = _trace_halves(scene, sky, sigma, g, camera, n_sky, st.sky_bands, 1, seed + 7919, depth,
+                                   win)
         sky_img = _images(scene, camera, sigma, sky_halves, st.sky_bands, 4, vint)
         sky_r = fit_ratios(st.sky_bands, sum(h.histogram for h in sky_halves))
         stats.update(sky_photons=int(sum(h.photons for h in sky_halves)),

@@ -22,6 +22,9 @@ The sun's first flight (order 1) is not tallied: single scattering is ray-marche
 photons are tallied from their first flight. A histogram of the light per exact order (whole cloud, weighted by
 w, collision estimator at the real collisions) gives each band's order distribution (:func:`natscene.scatter.bands.fit_ratios`).
 
+With a weight window (:mod:`.importance`) the wavefront splits photons that enter what the camera sees and
+roulettes the ones deep inside the cloud, at every collision; each photon carries a weight multiplier.
+
 Walks run wavefront-style (one Dr.Jit kernel per bounce, dead photons compacted away) while many photons
 are alive, then the long tail of survivors finishes in one symbolic loop.
 
@@ -143,8 +146,34 @@ class SkySource:
         self._pcell_dr = mi.Float(p_cell)
         self._cdf_dr = mi.Float(self.cdf)
 
-    def sample(self, n: int, rng):
+    def toward(self, camera_position, g: float = 0.7, share: float = 0.2) -> "SkySource":
+        """This source with a share of its directions drawn from an HG(``g``) lobe of photon directions around
+        the direction from the box's centre to ``camera_position``: the skylight that reaches the camera after
+        one forward scattering comes from the dome behind the cloud, a small cone that the dome's luminance
+        rarely samples (at g 0.85 the phase function's forward peak is 80× its mean). A mixture of the two
+        densities (each direction weighted by 1 / the mixture's pdf) stays unbiased."""
+        import copy
+        c = np.asarray(camera_position, np.float64) - (self.lo + self.hi) / 2
+        out = copy.copy(self)
+        out.lobe = (c / np.linalg.norm(c), float(g), float(share))
+        return out
+
+    def _pdf_radiance(self, om):
+        """(pdf of the dome's own sampling at om, radiance per channel at om)."""
         omega_cell = 2.0 * math.pi / (self.n_theta * self.n_phi)
+        up = om.y > 0
+        it = mi.UInt32(dr.clip(dr.floor((1.0 - om.y) * self.n_theta), 0, self.n_theta - 1))
+        phi = dr.atan2(om.x, om.z)
+        phi = dr.select(phi < 0, phi + 2.0 * math.pi, phi)
+        ip = mi.UInt32(dr.clip(dr.floor(phi / (2.0 * math.pi) * self.n_phi), 0, self.n_phi - 1))
+        cell = it * self.n_phi + ip
+        pdf = dr.select(up, (1.0 - self.p_ground) * dr.gather(mi.Float, self._pcell_dr, cell) / omega_cell,
+                        mi.Float(self.p_ground / (2.0 * math.pi)))
+        rad = [dr.select(up, dr.gather(mi.Float, self._rgb_dr[c], cell), 0.0) for c in range(3)]
+        rad.append(dr.select(up, 0.0, 1.0))
+        return pdf, rad
+
+    def sample(self, n: int, rng):
         u_sel = rng.next_float32()
         ground = u_sel < self.p_ground
         # upper hemisphere: a cell from the luminance CDF, uniform inside it
@@ -162,9 +191,15 @@ class SkySource:
         phi = dr.select(ground, phi_dn, phi_up)
         sn = dr.safe_sqrt(1.0 - mu * mu)
         om = mi.Vector3f(sn * dr.sin(phi), mu, sn * dr.cos(phi))     # toward the source
-        pdf_up = (1.0 - self.p_ground) * dr.gather(mi.Float, self._pcell_dr, cell) / omega_cell
-        pdf_dn = mi.Float(self.p_ground / (2.0 * math.pi))
-        pdf = dr.select(ground, pdf_dn, pdf_up)
+        lobe = getattr(self, "lobe", None)
+        if lobe is not None:
+            c, g_l, share = lobe
+            use = rng.next_float32() < share
+            d_l = _scatter_dir(mi.Vector3f(dr.zeros(mi.Vector3f, n) + _vec(c)), g_l, rng)
+            om = dr.select(use, -d_l, om)
+        pdf, rad = self._pdf_radiance(om)
+        if lobe is not None:
+            pdf = (1.0 - share) * pdf + share * hg_dr(dr.dot(-om, _vec(c)), g_l)
         # a face of the box facing om, chosen by projected area, and a uniform point on it
         ext = [float(e) for e in self.hi - self.lo]
         areas = (ext[1] * ext[2], ext[0] * ext[2], ext[0] * ext[1])
@@ -184,9 +219,7 @@ class SkySource:
         o = mi.Point3f(x, y, z) + om * eps
         d = -om
         base = a_proj / (pdf * n)
-        w = [dr.select(ground, 0.0, dr.gather(mi.Float, self._rgb_dr[c], cell) * base) for c in range(3)]
-        w.append(dr.select(ground, base, 0.0))
-        return mi.Point3f(o), mi.Vector3f(d), w
+        return mi.Point3f(o), mi.Vector3f(d), [r * base for r in rad]
 
 
 @dataclass
@@ -246,7 +279,7 @@ def _histogram(p, w, k, g, wts, hist, cam, lo, ext, max_order, vis):
                       dr.minimum(k, max_order))
 
 
-def _segment_tally(k, w, g, wts, accs, slot_tabs, cam, lo, ext, res, caches, max_order, vis):
+def _segment_tally(k, w, g, wts, accs, slot_tabs, cam, lo, ext, res, caches, max_order, vis, phase=True):
     """The tally of a flight toward the photon's k-th collision (per lane k): at each tentative collision x,
     ratio · p(w · ω_cam(x), g) · w_vis(x) · Φ into the cache cell of x, band of order k (the light that scatters
     at x toward the camera after k - 1 scatterings on the way)."""
@@ -254,7 +287,9 @@ def _segment_tally(k, w, g, wts, accs, slot_tabs, cam, lo, ext, res, caches, max
     slots = [dr.gather(mi.Int32, slot_tabs[ci], kk) for ci in range(len(caches))]
 
     def tally(x, ratio, mask):
-        val = ratio * hg_dr(dr.dot(w, dr.normalize(cam - x)), g) * _visibility(vis, x, lo, ext)
+        val = ratio * _visibility(vis, x, lo, ext)
+        if phase:
+            val = val * hg_dr(dr.dot(w, dr.normalize(cam - x)), g)
         for ci, (factor, dims, ncell) in enumerate(caches):
             idx = mi.UInt32(dr.maximum(slots[ci], 0)) * ncell + _cache_index(x, lo, ext, res, factor, dims)
             for c in range(len(wts)):
@@ -283,9 +318,50 @@ def _walk_tail(med, grid, p, w, wts, k0: int, sig_k, g, rng, accs, hist, slot_ta
     return alive, count
 
 
+def _weight_window(window, p, w, wts, rng, alive, mult, lo, ext, res, split_max: int, seed: int, stream: int):
+    """Splitting and Russian roulette at the photons' collisions against a weight window
+    (:mod:`natscene.scatter.importance`): ``window`` = (factor, dims, targets per cell). A photon of weight
+    multiplier m in a cell of target T splits into n = min(floor(m / T), ``split_max``) copies of weight m / n
+    when m > 2T, and survives with probability m / T at weight T when m < T / 2; both keep every expected
+    tally. The copies after the first get PCG32 streams of their own (``stream`` numbers them across the run).
+    Returns the new, compacted wavefront: p, w, wts, rng, alive, mult, its width, and the next ``stream``."""
+    factor, dims, targets = window
+    T = dr.gather(mi.Float, targets, _cache_index(p, lo, ext, res, factor, dims))
+    r = mult / T
+    low = alive & (r < 0.5)
+    keep = alive & (~low | (rng.next_float32() < r))
+    n = dr.select(keep & (r > 2.0), dr.minimum(dr.floor(r), float(split_max)), 1.0)
+    n = dr.select(keep, n, 0.0)
+    f = dr.select(low, T / mult, 1.0) / n
+    mult = mult * f
+    wts = [x * f for x in wts]
+    dr.eval(n, mult, rng, *wts)
+    counts = np.asarray(n).astype(np.int64)
+    total = int(counts.sum())
+    if total == 0:
+        return p, w, wts, rng, dr.zeros(mi.Bool, dr.width(p)), mult, 0, stream
+    idx = mi.UInt32(np.repeat(np.arange(counts.size, dtype=np.uint32), counts))
+    rank = np.arange(total) - np.repeat(np.cumsum(counts) - counts, counts)
+    p = dr.gather(mi.Point3f, p, idx)
+    w = dr.gather(mi.Vector3f, w, idx)
+    wts = [dr.gather(mi.Float, x, idx) for x in wts]
+    mult = dr.gather(mi.Float, mult, idx)
+    state, inc = dr.gather(mi.UInt64, rng.state, idx), dr.gather(mi.UInt64, rng.inc, idx)
+    fresh = mi.PCG32(size=total, initstate=state,
+                     initseq=mi.UInt64(np.arange(stream, stream + total, dtype=np.uint64))
+                     + mi.UInt64(int(seed) * 104729 + 2 ** 40))
+    copy = mi.Bool(rank > 0)
+    rng = mi.PCG32()
+    rng.state = dr.select(copy, fresh.state, state)
+    rng.inc = dr.select(copy, fresh.inc, inc)
+    dr.eval(p, w, mult, rng, *wts)
+    return p, w, wts, rng, dr.full(mi.Bool, True, total), mult, total, stream + total
+
+
 def trace(med, grid: MajorantGrid, source, sigma: float, g: float, camera_position, n_photons: int, bands,
           caches=((2, None),), seed: int = 0, max_order: int = 4096, k_min: int = 2, batch: int = 2 ** 20,
-          progress=None, camera_depth=None, tally_rate: float = 0.0) -> InscatterTally:
+          progress=None, camera_depth=None, tally_rate: float = 0.0, phase: bool = True,
+          window=None, split_max: int = 8) -> InscatterTally:
     """Trace ``n_photons`` from ``source`` through the medium at (sigma, g) and tally the in-scatter caches.
 
     ``caches``: (factor, band indices or None = all bands) per cache; every band goes to exactly one cache.
@@ -294,6 +370,11 @@ def trace(med, grid: MajorantGrid, source, sigma: float, g: float, camera_positi
     w(x) = exp(-sigma_t k D̃(x)) (:func:`natscene.scatter.inscatter.visibility`); None: 1 everywhere.
     ``tally_rate``: tentative collisions (tally samples) per voxel length at least, in every non-empty majorant
     cell (:func:`natscene.scatter.majorant.free_flight`'s ``rate_floor``).
+    ``phase``: False tallies μ_t/μ̄ · w · Φ without the phase function (the scalar flux, for the weight window's
+    pilot run, :func:`natscene.scatter.allorders.weight_window`).
+    ``window``: (factor, (cx, cy, cz), targets Float) or None: splitting and Russian roulette at every collision
+    of the wavefront against this weight window (:func:`_weight_window`, :mod:`natscene.scatter.importance`); the
+    survivors of the symbolic tail keep their weights.
     """
     density = med.volume.density
     nz, ny, nx = density.shape
@@ -339,6 +420,7 @@ def trace(med, grid: MajorantGrid, source, sigma: float, g: float, camera_positi
     collisions = 0
     truncated = mi.Float(0.0)
     done = 0
+    stream = 0          # PCG32 streams handed to split copies so far
     while done < n_photons:
         n = min(batch, n_photons - done)
         rng = mi.PCG32(size=n, initstate=dr.arange(mi.UInt64, n) + mi.UInt64(done),
@@ -349,13 +431,14 @@ def trace(med, grid: MajorantGrid, source, sigma: float, g: float, camera_positi
             unit = max(float(dr.max(sum(wts))[0]), 1e-300)
         wts = [x / unit for x in wts]                # in units of the largest photon power: O(1) values
         alive = dr.full(mi.Bool, True, n)
+        mult = dr.full(mi.Float, 1.0, n)
         k = 0
         width = n
         while True:
             if k > 0:
                 w = _scatter_dir(w, g, rng)
             seg = (_segment_tally(dr.opaque(mi.UInt32, k + 1, dr.width(p)), w, g, wts, accs, slot_tabs, cam, lo, ext,
-                                  res, geo, max_order, vis) if k + 1 >= k_min else None)
+                                  res, geo, max_order, vis, phase) if k + 1 >= k_min else None)
             t, hit = free_flight(med, grid, p, w, sig_k, rng, alive, tally=seg,
                                  rate_floor=floor if seg is not None else 0.0)
             alive &= hit
@@ -373,7 +456,12 @@ def trace(med, grid: MajorantGrid, source, sigma: float, g: float, camera_positi
             if k >= max_order:
                 truncated += dr.sum(dr.select(alive, sum(wts), 0.0))
                 break
-            if n_alive < width // 2:
+            if window is not None:
+                p, w, wts, rng, alive, mult, width, stream = _weight_window(
+                    window, p, w, wts, rng, alive, mult, lo, ext, res, split_max, seed, stream)
+                if width == 0:
+                    break
+            elif n_alive < width // 2:
                 sel = dr.compress(alive)
                 p = dr.gather(mi.Point3f, p, sel)
                 w = dr.gather(mi.Vector3f, w, sel)
