@@ -26,7 +26,9 @@ depth toward the camera).
 Effort goes where the variance is: the number of photons is set from a collision budget (a short pilot run
 measures the collisions per photon at this sigma_t, g), because the noise of a cell falls with the
 collisions in it, and a thin cloud (sigma_t = 0.1) makes five times fewer collisions per photon than a
-thick one (sigma_t = 1).
+thick one (sigma_t = 1). With ``importance`` the photons split where the camera sees the cloud and its flux is
+low and are rouletted deep inside (:func:`weight_window`, :mod:`natscene.scatter.importance`), and a share of
+the sky photons comes from a lobe of directions toward the camera (:meth:`natscene.scatter.photons.SkySource.toward`).
 """
 from __future__ import annotations
 
