@@ -145,6 +145,7 @@ class SkySource:
         self._rgb_dr = [mi.Float(rgb[..., c].ravel()) for c in range(3)]
         self._pcell_dr = mi.Float(p_cell)
         self._cdf_dr = mi.Float(self.cdf)
+        self.lobe = None          # (direction toward the camera, g, share): see toward()
 
     def toward(self, camera_position, g: float = 0.7, share: float = 0.2) -> "SkySource":
         """This source with a share of its directions drawn from an HG(``g``) lobe of photon directions around
@@ -191,7 +192,7 @@ class SkySource:
         phi = dr.select(ground, phi_dn, phi_up)
         sn = dr.safe_sqrt(1.0 - mu * mu)
         om = mi.Vector3f(sn * dr.sin(phi), mu, sn * dr.cos(phi))     # toward the source
-        lobe = getattr(self, "lobe", None)
+        lobe = self.lobe
         if lobe is not None:
             c, g_l, share = lobe
             use = rng.next_float32() < share
