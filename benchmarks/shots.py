@@ -10,8 +10,10 @@ settings (config shots.day_to_sunset.render: 16 spp, orders up to 4), each numbe
   for every frame after the first of a sun) against the HG frame (phase hg) of the same view and settings, a
   frame of the main job's `sunset_mie` shot (the sun 1 deg behind the anvil's edge), and the time of one
   point-to-point solve (when this run has to solve it; reused from results/mie/pointcloud otherwise);
-- side-by-side crops for the docs: raw | denoised (shots_denoise.png) and Mie | HG around the hidden sun
-  (shots_mie_sunset.png), in results/benchmarks/.
+- the same 640x480 frame with ``transport: dobashi`` (path-traced orders 2-4, the frames before issue 16):
+  its time and noise figure before and after the denoiser;
+- side-by-side crops for the docs: Dobashi raw | denoised | all-orders raw | denoised (shots_denoise.png) and
+  Mie | HG around the hidden sun (shots_mie_sunset.png), in results/benchmarks/.
 
 The day frame is the kite view with the kite fit's parameters (keyframe 0 of day_to_sunset). Wall times on
 this machine vary with the load of other jobs: the load average is recorded; compare ratios.
@@ -146,11 +148,29 @@ def main():
     res.update({"cloud_pixels_640x480": int(cloud.sum()), "noise_figure_raw_640x480": round(n_raw, 4),
                 "noise_figure_denoised_640x480": round(n_den, 4), "noise_reduction": round(n_raw / n_den, 2),
                 "denoised_mean_radiance_change": round(mean_change, 4),
+                "photons_640x480": outs[0]["photons"],
                 "target_noise_figure_raw": 0.05, "target_noise_figure_denoised": 0.01})
     log(f"640x480: {res['seconds_frame_640x480']} s, noise figure {n_raw:.4f} -> {n_den:.4f}")
+
+    # --- the same frame with the paper's transport (path-traced orders 2-4, the frames before issue 16)
+    dob = []
+    for seed in (0, 1):
+        t0 = time.perf_counter()
+        dob.append(render_shot_frame(vol, state, {**shot, "resolution": [640, 480],
+                                                  "render": {**shot["render"], "transport": "dobashi",
+                                                             "seed": seed}}, denoiser=oidn))
+        if seed == 0:
+            res["seconds_frame_640x480_dobashi"] = round(time.perf_counter() - t0, 2)
+    d_raw = noise_figure(dob[0]["raw"], dob[1]["raw"], cloud)
+    d_den = noise_figure(dob[0]["final"], dob[1]["final"], cloud)
+    res.update({"noise_figure_raw_640x480_dobashi": round(d_raw, 4),
+                "noise_figure_denoised_640x480_dobashi": round(d_den, 4),
+                "noise_reduction_dobashi": round(d_raw / d_den, 2)})
+    log(f"dobashi 640x480: {res['seconds_frame_640x480_dobashi']} s, noise figure {d_raw:.4f} -> {d_den:.4f}")
     ys, xs = np.nonzero(cloud)
     k = 1.0 / float(np.percentile(outs[0]["final"][cloud], 99.5))
-    crop = [_crop(o, int(ys.mean()), int(xs.mean()), 240, 320) for o in (outs[0]["raw"], outs[0]["final"])]
+    crop = [_crop(o, int(ys.mean()), int(xs.mean()), 200, 300)
+            for o in (dob[0]["raw"], dob[0]["final"], outs[0]["raw"], outs[0]["final"])]
     out_dir = ROOT / "results" / "benchmarks"
     out_dir.mkdir(parents=True, exist_ok=True)
     _side_by_side(out_dir / "shots_denoise.png", crop, k)

@@ -103,7 +103,8 @@ def render_shot_frame(volume, state: dict, shot: dict, mie: dict | None = None, 
     (:class:`natscene.denoise.oidn.OIDN`) when ``denoise: oidn``.
 
     Returns {final, raw (H, W, 3): the frame after / before the denoiser; hg_final, hg_raw (mie_blend: the
-    HG twin); features {opacity, coverage, albedo, normal}; ratio (mie_blend); camera; timings}.
+    HG twin); features {opacity, coverage, albedo, normal}; ratio (mie_blend); camera; timings; photons (the
+    all-orders photon and collision counts, None for dobashi)}.
     """
     import time
 
@@ -137,7 +138,8 @@ def render_shot_frame(volume, state: dict, shot: dict, mie: dict | None = None, 
         t = time.perf_counter()
         final = denoise_frame(raw, feats, denoiser)
         timings["denoise_s"] = time.perf_counter() - t
-    out = {"raw": raw, "final": final, "features": feats, "camera": camera, "timings": timings}
+    out = {"raw": raw, "final": final, "features": feats, "camera": camera, "timings": timings,
+           "photons": comp.get("photons")}
     if shot.get("phase", "hg") == "mie_blend":
         if mie is None:
             raise ValueError("render_shot_frame: phase is 'mie_blend' but no Mie solutions were given")

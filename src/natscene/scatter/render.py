@@ -39,7 +39,7 @@ def render(volume, camera, sun_dir, params: dict, sky, orders: int = 4, spp: int
            batch_spp: int | None = None, return_components: bool = False, transport: str = "all_orders",
            sky_settings: dict | None = None, dome=None, ground_albedo=DEFAULT_GROUND_ALBEDO,
            sun_collisions: int | None = None, sky_collisions: int | None = None, skylight: bool = True,
-           all_orders=None):
+           all_orders=None, tally_rate: float | None = None, ground_share: float | None = None):
     """L_cg (H, W, 3) for one parameter set (scalars; c_in and kappa_a (3,)).
 
     ``sky``: (H, W, 3) linear L_sky at the camera's resolution (or a constant (3,) colour).
@@ -47,7 +47,9 @@ def render(volume, camera, sun_dir, params: dict, sky, orders: int = 4, spp: int
     every order >= 2 of the sun's light and L_sky_lit the skylight's). ``skylight=False``: the sun alone
     lights the cloud (all_orders; e.g. to compare with a sun-only reference). ``all_orders``: an
     :class:`natscene.scatter.allorders.AllOrdersSettings` to start from (cache cells, tally rate...); the
-    step, supersampling and collision arguments override it.
+    step, supersampling, collision, ``tally_rate`` and ``ground_share`` (the share of the sky photons that
+    come from the ground) arguments override it. The photon counts follow the collision budgets, at most one
+    photon per two collisions (or the settings' caps, where higher).
     """
     from natscene.scatter.medium import make_medium
     from natscene.scatter.single import march_view
@@ -86,6 +88,12 @@ def render(volume, camera, sun_dir, params: dict, sky, orders: int = 4, spp: int
             st.sun_collisions = int(sun_collisions)
         if sky_collisions is not None:
             st.sky_collisions = int(sky_collisions)
+        if tally_rate is not None:
+            st.tally_rate = float(tally_rate)
+        if ground_share is not None:
+            st.p_ground = float(ground_share)
+        st.sun_photons_max = max(st.sun_photons_max, st.sun_collisions // 2)
+        st.sky_photons_max = max(st.sky_photons_max, st.sky_collisions // 2)
         if skylight:
             dome = dome if dome is not None else frame_dome(med.sun_dir, sky_settings)
         else:
