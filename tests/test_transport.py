@@ -236,6 +236,17 @@ def test_band_weights_closed_form():
             w = r ** (k - a)
             assert cb == pytest.approx(float((w * beta ** k).sum() / w.sum()), rel=1e-9)
     assert np.allclose(band_weights(SUN_BANDS, ratios, 1.0), 1.0)
+    # one ratio set per albedo (a GA population at its own table nodes): each row as its own explicit sum
+    per = rng.uniform(0.6, 0.99, (5, len(SUN_BANDS)))
+    betas = np.array([0.3, 0.9, 0.99, 0.999, 1.0])
+    c = band_weights(SUN_BANDS, per, betas)
+    for j in range(5):
+        for (a, e), r, cb in zip(SUN_BANDS, per[j], c[j]):
+            k = np.arange(a, (e or 200_000) + 1)
+            w = r ** (k - a)
+            assert cb == pytest.approx(float((w * betas[j] ** k).sum() / w.sum()), rel=1e-9)
+    with pytest.raises(ValueError, match="ratio sets"):
+        band_weights(SUN_BANDS, per, betas[:3])
     # a geometric histogram is fitted exactly
     h = np.zeros(4097)
     h[2:] = 0.93 ** np.arange(2, 4097)
@@ -274,3 +285,54 @@ def test_bad_transport_settings(vol):
         precompute(vol, CAM, SUN, sigmas=[0.5], gs=[0.5], n_m=0, transport="dobashi")
     with pytest.raises(InputError, match="precompute.spp"):
         precompute(vol, CAM, SUN, sigmas=[0.5], gs=[0.5], spp=0, transport="dobashi")
+
+
+def test_all_orders_compose_is_the_explicit_sum_over_nodes_and_bands():
+    """The GA's fused all-orders composition (both back ends) against the formula written out per individual:
+    the bilinear (g, sigma_t) bracket of the band images weighted by c_b(beta), HG single scattering, the dome's
+    calibrated R, G, B and the ground light, plus T L_sky (natscene.scatter.compose module docstring)."""
+    from natscene.scatter.compose import compose_cloud
+    from natscene.scatter.tables import Tables
+    rng = np.random.default_rng(3)
+    H, W, Ns, Ng = 6, 5, 4, 3
+    sb, kb = SUN_BANDS, ((1, 1), (2, 8), (9, None))
+    sig, gs = np.array([0.1, 0.2, 0.5, 1.0]), np.array([0.0, 0.5, 0.85])
+    t = Tables(sigma_t=sig, g=gs, orders=[], s_sun=rng.random((Ns, H, W), np.float32),
+               s_amb=np.zeros((Ns, H, W), np.float32), transmittance=rng.random((Ns, H, W), np.float32),
+               multiple=np.zeros((0, Ng, Ns, H, W), np.float32), t_c=rng.random((H, W), np.float32),
+               cos_theta=rng.uniform(-1, 1, (H, W)).astype(np.float32), footprint=np.ones((H, W), np.float32),
+               meta={"skylight": {"irradiance_rgb": [0.3, 0.4, 0.6], "sun_elevation_sin": 0.5}},
+               transport="all_orders", sun_bands=sb, sky_bands=kb,
+               sun_ms=rng.random((len(sb), Ng, Ns, H, W), np.float32),
+               sky_ms=rng.random((4, len(kb), Ng, Ns, H, W), np.float32),
+               sun_ratios=rng.uniform(0.5, 0.99, (Ng, Ns, len(sb))), sky_ratios=rng.uniform(0.5, 0.99, (Ng, Ns, len(kb))))
+    P = 7
+    p = {"L_in": rng.uniform(1, 8, P), "g": rng.uniform(-0.2, 0.95, P), "sigma_t": rng.uniform(0.05, 1.2, P),
+         "beta": rng.uniform(0.9, 1.0, P), "L_amb": np.zeros(P), "c_in": rng.uniform(0.5, 1.5, (P, 3)),
+         "sky_scale": rng.uniform(0.5, 2, (P, 3)), "ground_albedo": rng.uniform(0, 0.5, (P, 3))}
+    sky = rng.random((H, W, 3), np.float32)
+    expect = np.zeros((P, H, W, 3))
+    for j in range(P):
+        def bracket(grid, x):
+            x = min(max(x, grid[0]), grid[-1])
+            i = min(int(np.searchsorted(grid, x, side="right")) - 1, grid.size - 2)
+            f = (x - grid[i]) / (grid[i + 1] - grid[i])
+            return [(i, 1 - f), (i + 1, f)]
+        g, b = p["g"][j], p["beta"][j]
+        phase = (1 - g * g) / (4 * np.pi * (1 + g * g - 2 * g * t.cos_theta) ** 1.5)
+        G = p["ground_albedo"][j] / np.pi * (p["L_in"][j] * p["c_in"][j] * 0.5 + p["sky_scale"][j] * [0.3, 0.4, 0.6])
+        for si, ws in bracket(sig, p["sigma_t"][j]):
+            single = p["L_in"][j] * b * phase * t.s_sun[si]
+            expect[j] += ws * (single[..., None] * p["c_in"][j] + t.transmittance[si][..., None] * sky)
+            for gi, wg in bracket(gs, g):
+                cs = band_weights(sb, t.sun_ratios[gi, si], b)[0]
+                ck = band_weights(kb, t.sky_ratios[gi, si], b)[0]
+                sun = np.tensordot(cs, t.sun_ms[:, gi, si], 1)
+                k = np.tensordot(ck, t.sky_ms[:, :, gi, si], axes=(0, 1))              # (4, H, W)
+                expect[j] += wg * ws * (p["L_in"][j] * sun[..., None] * p["c_in"][j]
+                                        + np.moveaxis(k[:3], 0, -1) * p["sky_scale"][j] + k[3][..., None] * G)
+    for backend in ("numpy", "auto"):
+        got = compose_cloud(t, p, sky, backend=backend)
+        assert np.allclose(got, expect, rtol=2e-5, atol=1e-6), backend
+        sub = compose_cloud(t, p, sky, pixels=np.arange(0, H * W, 3), backend=backend)
+        assert np.allclose(sub, expect.reshape(P, -1, 3)[:, ::3], rtol=2e-5, atol=1e-6), backend

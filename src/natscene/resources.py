@@ -36,6 +36,10 @@ MODEL: dict[str, dict[str, float]] = {  # bytes per unit / MB; n = measured jobs
     "composite": {"base": 323.9, "samples": 0 / MB, "texture_pixels": 173 / MB},  # n=4, max residual 115.3 MB
     "composite_reference": {"base": 373.6, "spectral_samples": 8.105 / MB, "texture_pixels": 0 / MB},  # n=3, max residual 0.5 MB
     "fit": {"base": 298.3, "pixels": 2275 / MB, "table_values": 0 / MB},  # n=2, max residual 0.0 MB
+    # all-orders tables (8 + 4x3 band images per node): one main-job run (kite, 320x240, 7 sigma_t x 5 g,
+    # 55.9 M table values): 1008 MB peak -> 9.7 bytes per value over base and pixels (the tables as read, their
+    # pixel-compressed copy for the GA and the EXR reader's buffers)
+    "fit_all_orders": {"base": 298.3, "pixels": 2275 / MB, "table_values": 9.72 / MB},  # n=1
     "interpolate": {"base": 162.0},  # n=8, max residual 0.0 MB
     "leaf_season": {"base": 266.5, "pixels": 223.5 / MB},  # n=5, max residual 0.0 MB
     "mie_render": {"base": 330.0, "pixels": 1068 / MB, "voxels": 64.25 / MB},  # n=6, max residual 2.3 MB
@@ -51,6 +55,11 @@ MODEL: dict[str, dict[str, float]] = {  # bytes per unit / MB; n = measured jobs
     "precompute": {"base": 365.9, "paths": 353.6 / MB, "pixels": 0 / MB, "table_values": 0 / MB, "voxels": 12.15 / MB},  # n=5, max residual 145.3 MB
     "recolour": {"base": 288.7, "pixels": 452.4 / MB},  # n=3, max residual 0.5 MB
     "render_frame": {"base": 467.5, "paths": 0 / MB, "pixels": 1323 / MB, "voxels": 44.89 / MB},  # n=8, max residual 85.4 MB
+    # all-orders frames: the photons' wavefront grows with the collision budget, 4.7 bytes per collision (one
+    # 640x480 main-job frame at 4 M and 37.5 M collisions: 1243 and 1401 MB); the base is raised so that the
+    # main job's frames (1387-1470 MB at 31 M collisions, one run) sit under the model
+    "render_frame_all_orders": {"base": 708.0, "pixels": 1323 / MB, "voxels": 44.89 / MB,
+                                "collisions": 4.7 / MB},  # n=26 + 2
     "sky": {"base": 204.5, "pixels": 684.8 / MB},  # n=3, max residual 8.9 MB
     "sky_resample": {"base": 184.7, "pixels": 62.58 / MB},  # n=2, max residual 0.0 MB
     "tile_texture": {"base": 185.2, "pixels": 182 / MB},  # n=5, max residual 40.2 MB
@@ -201,6 +210,8 @@ def job_features(rule: str, config: dict, wildcards: dict, root) -> tuple[str, d
         p = _pixels(config["views"][kf["view"]].get("resolution", [320, 240]))
         feats["pixels"], keys["pixels"] = p, f"views.{kf['view']}.resolution"
         feats["table_values"], keys["table_values"] = _table_values(config, p), f"views.{kf['view']}.resolution"
+        if (config.get("precompute") or {}).get("transport", "all_orders") == "all_orders":
+            model = "fit_all_orders"
     elif rule in ("sky", "sky_resample"):
         ph = config["photos"][wc["photo"]]
         size = image_size(resolve_path(ph["path"], root))
@@ -210,8 +221,14 @@ def job_features(rule: str, config: dict, wildcards: dict, root) -> tuple[str, d
         feats["voxels"], keys["voxels"] = volume_voxels(config, shot["volume"], root)
         p = _pixels(shot.get("resolution", [640, 480]))
         feats["pixels"], keys["pixels"] = p, f"shots.{wc['shot']}.resolution"
-        feats["paths"] = _paths_per_pass(p, (shot.get("render") or {}).get("spp", 16))
-        keys["paths"] = f"shots.{wc['shot']}.resolution"
+        r = shot.get("render") or {}
+        if r.get("transport", "all_orders") == "all_orders":
+            model = "render_frame_all_orders"
+            feats["collisions"] = int(r.get("sun_collisions", 0)) + int(r.get("sky_collisions", 0))
+            keys["collisions"] = f"shots.{wc['shot']}.render.sun_collisions"
+        else:
+            feats["paths"] = _paths_per_pass(p, r.get("spp", 16))
+            keys["paths"] = f"shots.{wc['shot']}.resolution"
     elif rule == "point_scatter":
         feats["voxels"], keys["voxels"] = volume_voxels(config, wc["volume"], root)
     elif rule == "mie_render":

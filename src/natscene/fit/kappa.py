@@ -52,16 +52,22 @@ def _numba_kernel():
             for pc in _nb.prange(P * C):
                 p = pc // C
                 c = pc - p * C
+                d = np.empty(N, np.float32)
+                idx = np.empty(N, np.int32)
+                sub = np.zeros((4, n_levels), np.int32)    # 4 interleaved histograms: no store-to-load chain
+                for i in range(N):
+                    d[i] = cloud[p, c, i] - sky[c, i]
                 for k in range(K):
-                    h = out[p, c, k]
+                    for i in range(N):                      # the level's LUT cell (a loop that vectorises)
+                        v = d[i] * att[k, i] + sky[c, i]
+                        v = min(max(v, zero), one)
+                        idx[i] = np.int32(np.sqrt(v) * scale)
+                    sub[:] = 0
                     for i in range(N):
-                        s = sky[c, i]
-                        v = (cloud[p, c, i] - s) * att[k, i] + s
-                        if v > one:
-                            v = one
-                        elif v < zero:
-                            v = zero
-                        h[lut[np.int32(np.sqrt(v) * scale)]] += 1
+                        sub[i & 3, lut[idx[i]]] += 1
+                    h = out[p, c, k]
+                    for b in range(n_levels):
+                        h[b] = sub[0, b] + sub[1, b] + sub[2, b] + sub[3, b]
             return out
 
         _KERNEL = counts_kernel

@@ -70,15 +70,27 @@ def fit_ratios(bands, histogram) -> np.ndarray:
 
 
 def band_weights(bands, ratios, beta) -> np.ndarray:
-    """c_b(beta) (P, B) for albedos ``beta`` (P,): the band's order distribution w_b(k) ∝ r_b^k weighted by beta^k."""
+    """c_b(beta) (P, B) for albedos ``beta`` (P,): the band's order distribution w_b(k) ∝ r_b^k weighted by beta^k.
+
+    ``ratios``: (B,), one set for every albedo, or (P, B), one set per albedo (a GA population, each
+    individual at its own table node)."""
     beta = np.clip(np.atleast_1d(np.asarray(beta, np.float64)), 0.0, 1.0)
+    r_all = np.asarray(ratios, np.float64)
+    if r_all.ndim == 2 and r_all.shape[0] != beta.size:
+        raise ValueError(f"band_weights: {r_all.shape[0]} ratio sets for {beta.size} albedos")
     out = np.zeros((beta.size, len(bands)))
-    for i, ((a, e), r) in enumerate(zip(bands, np.asarray(ratios, np.float64))):
+    for i, (a, e) in enumerate(bands):
+        r = r_all[..., i]
         if e is None:
             out[:, i] = beta ** a * (1.0 - r) / (1.0 - r * beta)
-        else:
+        elif r_all.ndim == 1:
             k = np.arange(a, e + 1, dtype=np.float64)
             w = r ** (k - a)
             w /= w.sum()
             out[:, i] = (beta[:, None] ** k[None, :]) @ w
+        else:
+            k = np.arange(a, e + 1, dtype=np.float64)
+            w = r[:, None] ** (k - a)[None, :]
+            w /= w.sum(1, keepdims=True)
+            out[:, i] = np.einsum("pk,pk->p", beta[:, None] ** k[None, :], w)
     return out

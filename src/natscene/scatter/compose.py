@@ -159,6 +159,17 @@ def _bracket(grid: np.ndarray, x: float) -> tuple[int, float]:
     return i, float((xc - grid[i]) / (grid[i + 1] - grid[i]))
 
 
+def _brackets(grid: np.ndarray, x) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`_bracket` for an array of values: (i (P,) int64, f (P,) float64)."""
+    x = np.atleast_1d(np.asarray(x, np.float64))
+    n = grid.size
+    if n == 1:
+        return np.zeros(x.size, np.int64), np.zeros(x.size)
+    xc = np.clip(x, grid[0], grid[-1])
+    i = np.clip(np.searchsorted(grid, xc, side="right") - 1, 0, n - 2).astype(np.int64)
+    return i, (xc - grid[i]) / (grid[i + 1] - grid[i])
+
+
 class PixelTables:
     """The tables restricted to N pixels in a pixel-compressed layout for fast composition.
 
@@ -243,8 +254,13 @@ def _compose_numba(p, sig, gs, orders, arrays, cos_t, sky, P, N):
 _KERNEL_AO = None
 
 
+_CHUNK_AO = 1024
+
+
 def _numba_kernel_all_orders():
-    """Fused all-orders composition per (individual, pixel chunk), parallel over both (compiled once, cached)."""
+    """Fused all-orders composition, parallel over pixel chunks (compiled once, cached). Each chunk composes
+    every individual in turn, so the table rows of the nodes the population shares are read from main
+    memory once per chunk and from cache after that."""
     global _KERNEL_AO
     if _KERNEL_AO is None:
         @_nb.njit(parallel=True, cache=True, fastmath=True)
@@ -252,49 +268,49 @@ def _numba_kernel_all_orders():
                    out):
             P, N = out.shape[0], out.shape[1]
             Bs, Bk = sun_ms.shape[2], sky_ms.shape[3]
-            nchunk = (N + _CHUNK - 1) // _CHUNK
-            for task in _nb.prange(P * nchunk):
-                j = task // nchunk
-                n0 = (task - j * nchunk) * _CHUNK
-                n1 = min(n0 + _CHUNK, N)
-                s0, s1 = sidx[j, 0], sidx[j, 1]
-                w0, w1 = ws[j, 0], ws[j, 1]
-                g = gpar[j]
-                c_ph = np.float32((1.0 - g * g) * 0.07957747154594767) * a_sun[j]
-                opg = np.float32(1.0 + g * g)
-                tg = np.float32(2.0 * g)
+            nchunk = (N + _CHUNK_AO - 1) // _CHUNK_AO
+            for ci in _nb.prange(nchunk):
+                n0 = ci * _CHUNK_AO
+                n1 = min(n0 + _CHUNK_AO, N)
                 m = n1 - n0
                 acc = np.empty(m, np.float32)
-                acc_c = np.zeros((3, m), np.float32)
-                for n in range(m):
-                    q = n0 + n
-                    d = opg - tg * cos_t[q]
-                    acc[n] = c_ph / (d * np.sqrt(d)) * (w0 * s_sun[s0, q] + w1 * s_sun[s1, q])
-                for u in range(2):
-                    gi = gidx[j, u]
-                    for v in range(2):
-                        si = sidx[j, v]
-                        for b in range(Bs):
-                            w = wsun[j, u, v, b]
-                            if w != 0:
-                                row = sun_ms[gi, si, b]
-                                for n in range(m):
-                                    acc[n] += w * row[n0 + n]
-                        for b in range(Bk):
-                            w = wsky[j, u, v, b]
-                            if w != 0:
-                                gr = sky_ms[gi, si, 3, b]
-                                for c in range(3):
-                                    wa = w * a_sky[j, c]
-                                    wg = w * G[j, c]
-                                    rc = sky_ms[gi, si, c, b]
+                acc_k = np.empty((4, m), np.float32)      # the sky bands' dome R, G, B and ground light
+                for j in range(P):
+                    s0, s1 = sidx[j, 0], sidx[j, 1]
+                    w0, w1 = ws[j, 0], ws[j, 1]
+                    g = gpar[j]
+                    c_ph = np.float32((1.0 - g * g) * 0.07957747154594767) * a_sun[j]
+                    opg = np.float32(1.0 + g * g)
+                    tg = np.float32(2.0 * g)
+                    for n in range(m):
+                        q = n0 + n
+                        d = opg - tg * cos_t[q]
+                        acc[n] = c_ph / (d * np.sqrt(d)) * (w0 * s_sun[s0, q] + w1 * s_sun[s1, q])
+                    acc_k[:] = 0
+                    for u in range(2):
+                        gi = gidx[j, u]
+                        for v in range(2):
+                            si = sidx[j, v]
+                            for b in range(Bs):
+                                w = wsun[j, u, v, b]
+                                if w != 0:
+                                    row = sun_ms[gi, si, b]
                                     for n in range(m):
-                                        acc_c[c, n] += wa * rc[n0 + n] + wg * gr[n0 + n]
-                for n in range(m):
-                    q = n0 + n
-                    t = w0 * s_T[s0, q] + w1 * s_T[s1, q]
-                    for c in range(3):
-                        out[j, q, c] = acc[n] * c_in[j, c] + acc_c[c, n] + t * sky[q, c]
+                                        acc[n] += w * row[n0 + n]
+                            for b in range(Bk):
+                                w = wsky[j, u, v, b]
+                                if w != 0:
+                                    for c in range(4):
+                                        rc = sky_ms[gi, si, c, b]
+                                        for n in range(m):
+                                            acc_k[c, n] += w * rc[n0 + n]
+                    for n in range(m):
+                        q = n0 + n
+                        t = w0 * s_T[s0, q] + w1 * s_T[s1, q]
+                        gl = acc_k[3, n]
+                        for c in range(3):
+                            out[j, q, c] = (acc[n] * c_in[j, c] + a_sky[j, c] * acc_k[c, n] + G[j, c] * gl
+                                            + t * sky[q, c])
         _KERNEL_AO = kernel
     return _KERNEL_AO
 
@@ -319,25 +335,20 @@ def all_orders_weights(tables, p: dict, P: int):
     sig = np.asarray(tables.sigma_t, np.float64)
     gs = np.asarray(tables.g, np.float64)
     sb, kb = tables.sun_bands, tables.sky_bands
-    sidx = np.zeros((P, 2), np.int64)
-    gidx = np.zeros((P, 2), np.int64)
-    ws = np.zeros((P, 2), np.float32)
+    si, fs = _brackets(sig, p["sigma_t"])
+    gi, fg = _brackets(gs, p["g"])
+    sidx = np.stack([si, np.minimum(si + 1, sig.size - 1)], 1)
+    gidx = np.stack([gi, np.minimum(gi + 1, gs.size - 1)], 1)
+    ws = np.stack([1.0 - fs, fs], 1).astype(np.float32)
     wsun = np.zeros((P, 2, 2, len(sb)), np.float32)
     wsky = np.zeros((P, 2, 2, len(kb)), np.float32)
-    for j in range(P):
-        si, fs = _bracket(sig, p["sigma_t"][j])
-        gi, fg = _bracket(gs, p["g"][j])
-        sidx[j] = (si, min(si + 1, sig.size - 1))
-        gidx[j] = (gi, min(gi + 1, gs.size - 1))
-        ws[j] = (1.0 - fs, fs)
-        beta = p["beta"][j]
-        for u, wg in enumerate((1.0 - fg, fg)):
-            for v, wsv in enumerate((1.0 - fs, fs)):
-                if wg * wsv == 0:
-                    continue
-                g_n, s_n = gidx[j, u], sidx[j, v]
-                wsun[j, u, v] = wg * wsv * p["L_in"][j] * band_weights(sb, tables.sun_ratios[g_n, s_n], beta)[0]
-                wsky[j, u, v] = wg * wsv * band_weights(kb, tables.sky_ratios[g_n, s_n], beta)[0]
+    sun_r, sky_r = np.asarray(tables.sun_ratios), np.asarray(tables.sky_ratios)
+    for u, wg in enumerate((1.0 - fg, fg)):
+        for v, wsv in enumerate((1.0 - fs, fs)):
+            w = wg * wsv                                               # (P,)
+            g_n, s_n = gidx[:, u], sidx[:, v]
+            wsun[:, u, v] = (w * p["L_in"])[:, None] * band_weights(sb, sun_r[g_n, s_n], p["beta"])
+            wsky[:, u, v] = w[:, None] * band_weights(kb, sky_r[g_n, s_n], p["beta"])
     sl = tables.meta.get("skylight", {})
     a = _pop3(p, "sky_scale", P, 1.0)
     albedo = _pop3(p, "ground_albedo", P, DEFAULT_GROUND_ALBEDO)
