@@ -10,6 +10,7 @@ settings (config shots.day_to_sunset.render: 16 spp, orders up to 4), each numbe
   for every frame after the first of a sun) against the HG frame (phase hg) of the same view and settings, a
   frame of the main job's `sunset_mie` shot (the sun 1 deg behind the anvil's edge), and the time of one
   point-to-point solve (when this run has to solve it; reused from results/mie/pointcloud otherwise);
+- the noise figure of the shot's other keyframes (frames 12 and 23: the sun at el 15 and 3 deg), denoiser off;
 - the same 640x480 frame with ``transport: dobashi`` (path-traced orders 2-4, the frames before issue 16):
   its time and noise figure before and after the denoiser;
 - side-by-side crops for the docs: Dobashi raw | denoised | all-orders raw | denoised (shots_denoise.png) and
@@ -151,6 +152,18 @@ def main():
                 "photons_640x480": outs[0]["photons"],
                 "target_noise_figure_raw": 0.05, "target_noise_figure_denoised": 0.01})
     log(f"640x480: {res['seconds_frame_640x480']} s, noise figure {n_raw:.4f} -> {n_den:.4f}")
+
+    # --- the shot's other keyframes (warmer light, the sun at el 15 and 3 deg): their noise figure
+    fitted = {"chosen": _kite_params()}
+    res["noise_figure_raw_keyframes"] = {}
+    for i, kf in enumerate(day["keyframes"][1:], start=1):
+        r = resolve_keyframe("day_to_sunset", i, kf, cfg)
+        st = frame_state(r["at"], [{**r, "params": keyframe_params(r, fitted if r.get("fit") else None)}])
+        pair = [render_shot_frame(vol, st, {**shot, "resolution": [640, 480], "denoise": "none",
+                                            "render": {**shot["render"], "seed": seed}}) for seed in (0, 1)]
+        n_k = noise_figure(pair[0]["raw"], pair[1]["raw"], cloud_pixels(pair[0]["features"]["opacity"]))
+        res["noise_figure_raw_keyframes"][f"frame_{r['at']}"] = round(n_k, 4)
+        log(f"keyframe at {r['at']}: noise figure {n_k:.4f}")
 
     # --- the same frame with the paper's transport (path-traced orders 2-4, the frames before issue 16)
     dob = []
