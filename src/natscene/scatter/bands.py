@@ -78,16 +78,12 @@ def band_weights(bands, ratios, beta) -> np.ndarray:
     r_all = np.asarray(ratios, np.float64)
     if r_all.ndim == 2 and r_all.shape[0] != beta.size:
         raise ValueError(f"band_weights: {r_all.shape[0]} ratio sets for {beta.size} albedos")
+    r_all = np.broadcast_to(r_all, (beta.size, len(bands)))
     out = np.zeros((beta.size, len(bands)))
     for i, (a, e) in enumerate(bands):
-        r = r_all[..., i]
+        r = r_all[:, i]
         if e is None:
             out[:, i] = beta ** a * (1.0 - r) / (1.0 - r * beta)
-        elif r_all.ndim == 1:
-            k = np.arange(a, e + 1, dtype=np.float64)
-            w = r ** (k - a)
-            w /= w.sum()
-            out[:, i] = (beta[:, None] ** k[None, :]) @ w
         else:
             k = np.arange(a, e + 1, dtype=np.float64)
             w = r[:, None] ** (k - a)[None, :]
