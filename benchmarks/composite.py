@@ -52,7 +52,7 @@ def bundled_set(cfg, entry, shot, results: Path):
     from natscene.keyframes.sky import sky_image
     from natscene.geometry import Camera, sun_direction
     from natscene.leaves.texture import maple_mask
-    from natscene.volume.grid import placement
+    from natscene.volume.build import world_box
     kf = resolve_keyframe(entry["shot"], 0, shot["keyframes"][0], cfg)
     c = kf["camera"]
     W, H = shot["resolution"]
@@ -63,7 +63,7 @@ def bundled_set(cfg, entry, shot, results: Path):
     plate = sky_image(cam, sun_direction(sun["azimuth"], sun["elevation"]), shot["sky"])
     write_exr(results / f"shots/{entry['shot']}/frames/0000.exr", plate, ["R", "G", "B"])
     vol = cfg["volumes"][shot["volume"]]
-    lo, hi = placement(vol["resolution"], vol.get("size", 1.0))
+    lo, hi = world_box(vol, vol["resolution"])
     write_yaml(results / f"volumes/{shot['volume']}/meta.yaml", {"bbox_min": lo.tolist(), "bbox_max": hi.tolist()})
     grass = read_photo(ROOT / "resources/textures/grass_meadow_256.png")
     write_exr(results / "tiles/grass/bundled.exr", grass, ["R", "G", "B"])

@@ -28,6 +28,18 @@ DEFAULT_SIZE_M = {"cumulus": 2000.0, "cumulonimbus": 10000.0, "stratocumulus": 6
 DEFAULT_ALTITUDE_M = 1500.0
 
 
+def world_box(spec: dict, resolution) -> tuple[np.ndarray, np.ndarray]:
+    """World bounding box of a procedural ``volumes.<name>`` entry of ``resolution`` (nx, ny, nz): longest side
+    ``size`` (the kind's default when null), floor at ``altitude`` (default 1500 m)."""
+    size = spec.get("size")
+    if size is None:
+        size = DEFAULT_SIZE_M.get(spec.get("kind", "cumulus")) or 1000.0
+    altitude = spec.get("altitude")
+    lo, hi = placement(resolution, float(size))
+    alt = np.array([0.0, DEFAULT_ALTITUDE_M if altitude is None else float(altitude), 0.0])
+    return lo + alt, hi + alt
+
+
 def build_volume(spec: dict, name: str = "volume", grid_path: str | None = None, threads: int | None = None,
                  progress=None) -> tuple[Volume, dict]:
     """Generate (or import) the volume described by a validated ``volumes.<name>`` entry; return it and stats."""
@@ -53,11 +65,7 @@ def build_volume(spec: dict, name: str = "volume", grid_path: str | None = None,
     if file_box is not None and size is None and altitude is None:
         lo, hi = file_box                                      # the file's own transform (metres assumed)
     else:
-        if size is None:
-            size = DEFAULT_SIZE_M.get(kind) or 1000.0
-        lo, hi = placement((nx, ny, nz), float(size))
-        alt = DEFAULT_ALTITUDE_M if altitude is None else float(altitude)
-        lo, hi = lo + np.array([0.0, alt, 0.0]), hi + np.array([0.0, alt, 0.0])
+        lo, hi = world_box(spec, (nx, ny, nz))
     voxel = float((hi - lo)[2] / nz)
     scale = spec.get("extinction_scale")
     axis = spec.get("reference_axis", "z")
