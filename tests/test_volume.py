@@ -5,7 +5,7 @@ import pytest
 
 from natscene.errors import InputError
 from natscene.volume import grid, measure, noise, procedural
-from natscene.volume.build import build_volume
+from natscene.volume.build import build_volume, world_box
 from natscene.volume.procedural import generate, statistics
 
 
@@ -232,6 +232,9 @@ def test_volume_is_placed_in_metres():
     np.testing.assert_allclose(vol.bbox_max, [1000, 1500 + 1600, 1000])
     cb, _ = build_volume({"kind": "cumulonimbus", "resolution": [50, 30, 50], "seed": 2, "altitude": 1000.0}, "t")
     assert cb.bbox_max[0] - cb.bbox_min[0] == pytest.approx(10000) and cb.bbox_min[1] == 1000
+    # the box without the grid (benchmarks on a fresh checkout), from a validated entry whose size is null
+    lo, hi = world_box({"kind": "cumulonimbus", "size": None, "altitude": None}, (194, 122, 194))
+    np.testing.assert_allclose([lo, hi], [[-5000, 1500, -5000], [5000, 1500 + 10000 * 122 / 194, 5000]])
     # sigma_t keeps its meaning: the same mean optical depth at sigma_t = 1 whatever the size in metres
     small, _ = build_volume({"kind": "cumulus", "resolution": [40, 32, 40], "seed": 2, "size": 1.0}, "t")
     assert small.extinction_scale == pytest.approx(vol.extinction_scale * 2000, rel=1e-4)
