@@ -1,0 +1,101 @@
+"""Timings of the cloud chain on the Mitsuba variant ``natscene.variant.select_variant`` picks (``cuda_ad_rgb``
+where a CUDA GPU works): one all-orders precompute node (σ_t 0.5, g 0.85, twice: the first compiles the
+kernels), the main job's whole precompute (cumulus, ``kite`` view), and the day frame of ``day_to_sunset`` at
+640×480 and 1920×1080 (raw: no denoiser). Writes ``<out>/device_check.json`` and the raw 640×480 frame
+(``frame640.npy``, float16) to compare with a CPU render of the same frame.
+
+A GPU machine may lack the workflow's tools (Snakemake, jsonschema, OIDN): validate the config where they are
+installed and carry the JSON along:
+
+    .venv/bin/python tools/device_check.py --dump-config cfg.json        # here
+    python3 tools/device_check.py --config-json cfg.json --out OUT       # there (mitsuba, drjit, OpenImageIO,
+                                                                         # colour-science, numba, scipy on the path)
+"""
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "src"))
+sys.path.insert(0, str(ROOT / "benchmarks"))
+
+
+def validated_config() -> dict:
+    from natscene.config import load_yaml_config, validate_config
+    cfg = load_yaml_config(ROOT / "config" / "config.yaml")
+    return validate_config(cfg, ROOT / "workflow" / "schemas" / "config.schema.yaml", source="config/config.yaml")
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--dump-config", help="write the validated main config as JSON and stop")
+    ap.add_argument("--config-json", help="the validated main config (from --dump-config)")
+    ap.add_argument("--out", default=str(ROOT / "results" / "benchmarks"))
+    a = ap.parse_args()
+    if a.dump_config:
+        Path(a.dump_config).write_text(json.dumps(validated_config(), default=str))
+        return
+    cfg = json.loads(Path(a.config_json).read_text()) if a.config_json else validated_config()
+    out = Path(a.out)
+    out.mkdir(parents=True, exist_ok=True)
+    res = {}
+
+    def dump():
+        (out / "device_check.json").write_text(json.dumps(res, indent=1, default=str))
+
+    import numpy as np
+
+    from natscene.variant import select_variant
+    res["variant"] = select_variant()
+    from natscene.geometry import Camera, sun_direction
+    from natscene.keyframes.frame import render_shot_frame
+    from natscene.scatter.allorders import Lighting, Scene, settings_from_config, view_images
+    from natscene.scatter.tables import precompute, skylight_dome
+    from natscene.volume.build import build_volume
+    from shots import PARAMS, _state
+
+    view = cfg["views"]["kite"]
+    camera = Camera.from_view(view)
+    sun = sun_direction(view["sun"]["azimuth"], view["sun"]["elevation"])
+    vol, _ = build_volume(cfg["volumes"]["cumulus"], "cumulus")
+    pre = cfg["precompute"]
+    st = settings_from_config(pre)
+    scene = Scene(vol, Lighting(np.asarray(sun, np.float64), skylight_dome(sun, pre.get("skylight"))), st)
+    for rep in range(2):
+        t0 = time.perf_counter()
+        vi = view_images(scene, camera, 0.5, 0.85, seed=0)
+        res[f"node_s_{rep}"] = round(time.perf_counter() - t0, 2)
+        res["node_stats"] = vi.stats
+        res["node_sun_band_sums"] = [float(x) for x in vi.sun.sum((1, 2))]
+        print(rep, res[f"node_s_{rep}"], vi.stats, flush=True)
+        dump()
+    t0 = time.perf_counter()
+    tables = precompute(vol, camera, sun, sigmas=pre["sigma_t"], gs=pre["g"], n_m=pre["n_m"], spp=pre["spp"],
+                        seed=pre["seed"], step_voxels=pre["step_voxels"], supersample=pre["supersample"],
+                        rho_threshold=pre["rho_threshold"], transport="all_orders", all_orders=st,
+                        skylight=pre.get("skylight"), log=print)
+    res["precompute_main_job_s"] = round(time.perf_counter() - t0, 1)
+    res["precompute_noise"] = tables.meta.get("pixel_relative_standard_error")
+    dump()
+    day = cfg["shots"]["day_to_sunset"]
+    cvol, _ = build_volume(cfg["volumes"]["cumulonimbus"], "cumulonimbus")
+    cam = dict(day["keyframes"][0]["camera"])
+    cam.setdefault("up", [0, 1, 0])
+    state = _state(dict(PARAMS), 120.0, 30.0, cam)
+    shot = {**day, "phase": "hg", "denoise": "none"}
+    render_shot_frame(cvol, state, {**shot, "resolution": [32, 24], "render": {**shot["render"], "spp": 1}})
+    for w, h in ((640, 480), (1920, 1080)):
+        t0 = time.perf_counter()
+        o = render_shot_frame(cvol, state, {**shot, "resolution": [w, h]})
+        res[f"frame_{w}x{h}_s"] = round(time.perf_counter() - t0, 2)
+        res[f"frame_{w}x{h}_parts"] = {k: round(v, 2) for k, v in o["timings"].items()}
+        if w == 640:
+            np.save(out / "frame640.npy", o["raw"].astype(np.float16))
+        print(w, h, res[f"frame_{w}x{h}_s"], flush=True)
+        dump()
+
+
+if __name__ == "__main__":
+    main()
