@@ -35,7 +35,8 @@ REFERENCES = Path(__file__).parent / "data" / "transport_volpath.npz"
 # the all-orders settings of the volpath comparisons: cache cells of one voxel, 0.33 to 1.7 mean free paths of
 # this cloud at sigma_t 0.2 to 1 (the main job's cells of 2 and 4 voxels are 0.6 and 1.2 mean free paths of its
 # cumulus at the fitted sigma_t 0.12; docs/stages/precompute.md, "Measured")
-SETTINGS = AllOrdersSettings(sun_collisions=12_000_000, sky_collisions=200_000, fine_voxels=1, coarse_voxels=1)
+SETTINGS = AllOrdersSettings(sun_collisions=12_000_000, sky_collisions=200_000, fine_voxels=1, coarse_voxels=1,
+                             camera_lobe=0.6)
 
 
 def blob_volume(scale=80.0, n=(48, 32, 48)):
@@ -208,7 +209,7 @@ def test_white_furnace():
     """Sun off, a uniform dome of radiance L (sky and ground), a non-absorbing cloud: radiance L everywhere."""
     vol = blob_volume(scale=30.0)
     L = 0.7
-    st = AllOrdersSettings(sun_collisions=20_000, sky_collisions=6_000_000)
+    st = AllOrdersSettings(sun_collisions=20_000, sky_collisions=6_000_000, camera_lobe=0.6)
     scene = Scene(vol, Lighting(SUN, uniform_dome(L)), st)
     for sigma in (0.3, 1.0):
         vi = view_images(scene, CAM, sigma, 0.85, seed=4)

@@ -66,6 +66,8 @@ class AllOrdersSettings:
     split_max: int = 8                    # most copies of one photon at one collision
     sky_lobe_share: float = 0.2           # sky photons drawn from a lobe of directions toward the camera
     sky_lobe_g: float = 0.7               # the lobe's HG asymmetry
+    camera_lobe: float = 0.0              # share of the visible scatterings drawn around the direction to the
+                                          # camera (the precompute's config default is 0.6; frames: off)
 
 
 def settings_from_config(precompute: dict) -> AllOrdersSettings:
@@ -228,7 +230,7 @@ def _trace_halves(scene: Scene, source, sigma: float, g: float, camera, n_photon
     return [trace(scene.med, scene.grid, source, sigma, g, camera.position, max(1, n_photons // 2), bands,
                   caches=_caches(scene, bands), seed=seed * 2 + h, max_order=scene.settings.max_order, k_min=k_min,
                   camera_depth=camera_depth, tally_rate=scene.settings.tally_rate, window=window,
-                  split_max=scene.settings.split_max)
+                  split_max=scene.settings.split_max, camera_lobe=scene.settings.camera_lobe)
             for h in range(2)]
 
 

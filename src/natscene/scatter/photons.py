@@ -255,6 +255,19 @@ def _scatter_dir(w, g: float, rng):
     return dr.normalize(mi.Frame3f(w).to_world(mi.Vector3f(sin_t * dr.cos(phi), sin_t * dr.sin(phi), cos_t)))
 
 
+def _scatter_dir_lobe(w, p, g, rng, share, cam, lo, ext, vis):
+    """A new direction from the mixture q = (1 - a) HG(w_in, g) + a HG(ω_cam(p), g), a = ``share`` · w_vis(p),
+    and the weight factor HG(w_in · w_new, g) / q that keeps every expected tally (angle biasing toward the
+    camera: the light the camera sees leaves the collision in the phase function's forward peak around ω_cam)."""
+    a = share * _visibility(vis, p, lo, ext)
+    to_cam = dr.normalize(cam - p)
+    axis = dr.select(rng.next_float32() < a, to_cam, w)
+    w_new = _scatter_dir(axis, g, rng)
+    p_hg = hg_dr(dr.dot(w, w_new), g)
+    q = (1.0 - a) * p_hg + a * hg_dr(dr.dot(to_cam, w_new), g)
+    return w_new, p_hg / dr.maximum(q, 1e-30)
+
+
 def _visibility(vis, p, lo, ext):
     """The visibility weight w(p) (:func:`natscene.scatter.inscatter.visibility`); 1 without a camera depth.
     ``vis``: (depth texture, sig_k) or None."""
@@ -362,7 +375,7 @@ def _weight_window(window, p, w, wts, rng, alive, mult, lo, ext, res, split_max:
 def trace(med, grid: MajorantGrid, source, sigma: float, g: float, camera_position, n_photons: int, bands,
           caches=((2, None),), seed: int = 0, max_order: int = 4096, k_min: int = 2, batch: int = 2 ** 20,
           progress=None, camera_depth=None, tally_rate: float = 0.0, phase: bool = True,
-          window=None, split_max: int = 8) -> InscatterTally:
+          window=None, split_max: int = 8, camera_lobe: float = 0.0) -> InscatterTally:
     """Trace ``n_photons`` from ``source`` through the medium at (sigma, g) and tally the in-scatter caches.
 
     ``caches``: (factor, band indices or None = all bands) per cache; every band goes to exactly one cache.
@@ -415,6 +428,7 @@ def trace(med, grid: MajorantGrid, source, sigma: float, g: float, camera_positi
     sig_k = dr.opaque(mi.Float, float(sigma) * med.scale)
     floor = dr.opaque(mi.Float, float(tally_rate) / float(med.voxel))
     g = dr.opaque(mi.Float, float(g))
+    lobe = dr.opaque(mi.Float, float(camera_lobe))
     cam = mi.ScalarPoint3f(*[float(e) for e in camera_position])
     lo = _vec(med.bbox_min)
     ext = _vec(med.bbox_max - med.bbox_min)
@@ -436,7 +450,11 @@ def trace(med, grid: MajorantGrid, source, sigma: float, g: float, camera_positi
         k = 0
         width = n
         while True:
-            if k > 0:
+            if k > 0 and camera_lobe > 0 and vis is not None:
+                w, f = _scatter_dir_lobe(w, p, g, rng, lobe, cam, lo, ext, vis)
+                wts = [x * f for x in wts]
+                mult = mult * f
+            elif k > 0:
                 w = _scatter_dir(w, g, rng)
             seg = (_segment_tally(dr.opaque(mi.UInt32, k + 1, dr.width(p)), w, g, wts, accs, slot_tabs, cam, lo, ext,
                                   res, geo, max_order, vis, phase) if k + 1 >= k_min else None)
@@ -467,12 +485,13 @@ def trace(med, grid: MajorantGrid, source, sigma: float, g: float, camera_positi
                 p = dr.gather(mi.Point3f, p, sel)
                 w = dr.gather(mi.Vector3f, w, sel)
                 wts = [dr.gather(mi.Float, x, sel) for x in wts]
+                mult = dr.gather(mi.Float, mult, sel)
                 st, inc = dr.gather(mi.UInt64, rng.state, sel), dr.gather(mi.UInt64, rng.inc, sel)
                 rng = mi.PCG32()
                 rng.state, rng.inc = st, inc
                 alive = dr.full(mi.Bool, True, n_alive)
                 width = n_alive
-                dr.eval(p, w, rng, *wts)
+                dr.eval(p, w, rng, mult, *wts)
             if width <= max(2048, n // 64):
                 alive, count = _walk_tail(med, grid, p, w, wts, k, sig_k, g, rng, accs, hist, slot_tabs, cam, lo,
                                           ext, res, geo, max_order, k_min, vis, floor)

@@ -193,8 +193,19 @@ def _all_orders_multiple(volume, camera, sun_dir, sigmas, gs, settings, sky, see
     sky_ms = np.zeros((4, len(kb), Ng, Ns, H, W), np.float32)
     sun_r = np.ones((Ng, Ns, len(sb)))
     sky_r = np.ones((Ng, Ns, len(kb)))
-    noise = {f"sun.beta{b:g}": [] for b in NOISE_BETAS}
-    noise.update({f"sky.beta{b:g}": [] for b in NOISE_BETAS})
+    noise = {f"{part}.beta{b:g}": [] for part in ("sun", "sky", "sun_and_sky", "pixel") for b in NOISE_BETAS}
+    # the composed multiple scattering as the sun (irradiance 1) and the dome light the cloud, in luminance:
+    # the dome's R, G, B and the ground (albedo 0.2 under the sun and the dome), and the pixel's single scattering
+    from natscene.color import LUMA_709
+    from natscene.phase import hg
+    from natscene.scatter.single import march_view
+    from natscene.scatter.skylight import ground_radiance
+    s_dir = np.asarray(sun_dir, np.float64) / np.linalg.norm(sun_dir)
+    ground = ground_radiance(np.full(3, 0.2), max(float(s_dir[1]), 0.0), irradiance(dome))
+    sky_w = np.concatenate([LUMA_709, [float(ground @ LUMA_709)]])
+    single = march_view(scene.med, camera, [float(x) for x in sigmas], settings.step_voxels,
+                        settings.supersample)["S_sun"]
+    cos_q = camera.ray_directions() @ s_dir
     counts = {"sun_photons": 0, "sun_collisions": 0, "sky_photons": 0, "sky_collisions": 0}
     truncated = 0.0
     from natscene.scatter.allorders import standard_error
@@ -218,11 +229,16 @@ def _all_orders_multiple(volume, camera, sun_dir, sigmas, gs, settings, sky, see
             ck = band_weights(kb, vi.sky_ratios, b)[0]
             halves = [np.tensordot(cs, vi.sun_halves[h], 1) for h in range(2)]
             sky_halves = [np.tensordot(ck, vi.sky_halves[h][:3].sum(0), 1) for h in range(2)]
-            for key, (x, y) in ((f"sun.beta{b:g}", halves), (f"sky.beta{b:g}", sky_halves)):
+            both = [halves[h] + np.tensordot(ck, np.tensordot(sky_w, vi.sky_halves[h], 1), 1) for h in range(2)]
+            for key, (x, y) in ((f"sun.beta{b:g}", halves), (f"sky.beta{b:g}", sky_halves),
+                                (f"sun_and_sky.beta{b:g}", both)):
                 m = (x + y) / 2
                 se = standard_error(x, y)
                 ok = foot & (m > 0)
                 noise[key].append((se[ok] / m[ok]).astype(np.float32))
+            pixel = b * hg(cos_q, gs[j]) * single[i] + (both[0] + both[1]) / 2
+            ok = foot & (pixel > 0)
+            noise[f"pixel.beta{b:g}"].append((standard_error(*both)[ok] / pixel[ok]).astype(np.float32))
         el = time.perf_counter() - t0
         log(f"all orders sigma_t={sigmas[i]:g} g={gs[j]:g}: {vi.stats.get('sun_photons', 0)} sun + "
             f"{vi.stats.get('sky_photons', 0)} sky photons ({n + 1}/{len(todo)}, {el:.0f} s, "
@@ -241,9 +257,11 @@ def _all_orders_multiple(volume, camera, sun_dir, sigmas, gs, settings, sky, see
                      "sun_photons_max": int(settings.sun_photons_max), "sky_photons_max": int(settings.sky_photons_max),
                      "fine_voxels": int(settings.fine_voxels), "coarse_voxels": int(settings.coarse_voxels),
                      "guide_width": [float(x) for x in settings.guide_width], "max_order": int(settings.max_order),
-                     "majorant_voxels": int(settings.majorant_voxels)},
+                     "majorant_voxels": int(settings.majorant_voxels), "camera_lobe": float(settings.camera_lobe)},
         # per-pixel standard error of the composed multiple-scattering term divided by the term, over the
-        # cloud pixels and every (g, sigma_t) node: the sun's (orders >= 2) and the sky's (R+G+B, orders >= 1)
+        # cloud pixels and every (g, sigma_t) node: the sun's (orders >= 2), the sky's (R+G+B, orders >= 1), the
+        # two together (luminance, the sun's irradiance 1 and the dome as it lit the cloud); "pixel": the error of
+        # the two together divided by the composed cloud pixel (single scattering included)
         "pixel_relative_standard_error": {k: _stats(v) for k, v in noise.items()},
     }
     return sun_ms, sky_ms, sun_r, sky_r, meta
