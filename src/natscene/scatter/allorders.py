@@ -66,8 +66,8 @@ class AllOrdersSettings:
     split_max: int = 8                    # most copies of one photon at one collision
     sky_lobe_share: float = 0.2           # sky photons drawn from a lobe of directions toward the camera
     sky_lobe_g: float = 0.7               # the lobe's HG asymmetry
-    camera_lobe: float = 0.0              # share of the visible scatterings drawn around the direction to the
-                                          # camera (the precompute's config default is 0.6; frames: off)
+    camera_lobe: float = 0.6              # share of the visible scatterings drawn around the direction to the
+                                          # camera (angle biasing; the frames' renderer turns it off)
 
 
 def settings_from_config(precompute: dict) -> AllOrdersSettings:
