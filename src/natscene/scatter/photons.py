@@ -23,7 +23,10 @@ photons are tallied from their first flight. A histogram of the light per exact 
 w, collision estimator at the real collisions) gives each band's order distribution (:func:`natscene.scatter.bands.fit_ratios`).
 
 With a weight window (:mod:`.importance`) the wavefront splits photons that enter what the camera sees and
-roulettes the ones deep inside the cloud, at every collision; each photon carries a weight multiplier.
+roulettes the ones deep inside the cloud, at every collision; each photon carries a weight multiplier. With
+``camera_lobe`` > 0 the scatterings the camera sees are biased toward it (angle biasing, :func:`_scatter_dir_lobe`:
+a share of the new directions drawn around the direction to the camera, each photon weighted by HG / the
+mixture's pdf), so that the flights that carry the tally's forward peak are sampled often and lightly.
 
 Walks run wavefront-style (one Dr.Jit kernel per bounce, dead photons compacted away) while many photons
 are alive, then the long tail of survivors finishes in one symbolic loop.
