@@ -178,8 +178,9 @@ def skylight_dome(sun_dir, sky: dict | None):
     return daylight_dome(sun_dir, float(sky.get("turbidity", 3.0)))
 
 
-def _all_orders_multiple(volume, camera, sun_dir, sigmas, gs, settings, sky, seed, log):
-    """Band images of the sun's and the sky's light over the (g, sigma_t) grid, their ratios and noise."""
+def _all_orders_multiple(volume, camera, sun_dir, sigmas, gs, settings, sky, seed, log, single):
+    """Band images of the sun's and the sky's light over the (g, sigma_t) grid, their ratios and noise
+    (``single``: the precompute's :func:`natscene.scatter.single.march_view` of the grid)."""
     from natscene.scatter.allorders import Lighting, Scene, view_images
     from natscene.scatter.bands import band_weights
     from natscene.scatter.skylight import irradiance
@@ -198,20 +199,17 @@ def _all_orders_multiple(volume, camera, sun_dir, sigmas, gs, settings, sky, see
     # the dome's R, G, B and the ground (albedo 0.2 under the sun and the dome), and the pixel's single scattering
     from natscene.color import LUMA_709
     from natscene.phase import hg
-    from natscene.scatter.single import march_view
     from natscene.scatter.skylight import ground_radiance
     s_dir = np.asarray(sun_dir, np.float64) / np.linalg.norm(sun_dir)
     ground = ground_radiance(np.full(3, 0.2), max(float(s_dir[1]), 0.0), irradiance(dome))
     sky_w = np.concatenate([LUMA_709, [float(ground @ LUMA_709)]])
-    single = march_view(scene.med, camera, [float(x) for x in sigmas], settings.step_voxels,
-                        settings.supersample)["S_sun"]
     cos_q = camera.ray_directions() @ s_dir
+    foot = single["footprint"] > 0
     counts = {"sun_photons": 0, "sun_collisions": 0, "sky_photons": 0, "sky_collisions": 0}
     truncated = 0.0
     from natscene.scatter.allorders import standard_error
     todo = [(i, j) for i in range(Ns) if sigmas[i] > 0 for j in range(Ng)]
     t0 = time.perf_counter()
-    foot = None
     for n, (i, j) in enumerate(todo):
         vi = view_images(scene, camera, float(sigmas[i]), float(gs[j]), seed=seed * 100003 + i * 101 + j)
         sun_ms[:, j, i] = vi.sun
@@ -220,10 +218,6 @@ def _all_orders_multiple(volume, camera, sun_dir, sigmas, gs, settings, sky, see
         for k in counts:
             counts[k] += int(vi.stats.get(k, 0))
         truncated = max(truncated, vi.stats.get("sun_truncated", 0.0))
-        if foot is None:
-            from natscene.scatter.single import march_view
-            foot = march_view(scene.med, camera, [float(sigmas[-1])], settings.step_voxels,
-                              settings.supersample)["footprint"] > 0
         for b in NOISE_BETAS:
             cs = band_weights(sb, vi.sun_ratios, b)[0]
             ck = band_weights(kb, vi.sky_ratios, b)[0]
@@ -236,9 +230,9 @@ def _all_orders_multiple(volume, camera, sun_dir, sigmas, gs, settings, sky, see
                 se = standard_error(x, y)
                 ok = foot & (m > 0)
                 noise[key].append((se[ok] / m[ok]).astype(np.float32))
-            pixel = b * hg(cos_q, gs[j]) * single[i] + (both[0] + both[1]) / 2
+            pixel = b * hg(cos_q, gs[j]) * single["S_sun"][i] + m         # m, se: of the two together
             ok = foot & (pixel > 0)
-            noise[f"pixel.beta{b:g}"].append((standard_error(*both)[ok] / pixel[ok]).astype(np.float32))
+            noise[f"pixel.beta{b:g}"].append((se[ok] / pixel[ok]).astype(np.float32))
         el = time.perf_counter() - t0
         log(f"all orders sigma_t={sigmas[i]:g} g={gs[j]:g}: {vi.stats.get('sun_photons', 0)} sun + "
             f"{vi.stats.get('sky_photons', 0)} sky photons ({n + 1}/{len(todo)}, {el:.0f} s, "
@@ -309,7 +303,7 @@ def precompute(volume, camera, sun_dir, sigmas=DEFAULT_SIGMAS, gs=DEFAULT_GS, n_
         orders, multiple = [], np.zeros((0, len(gs), len(sigmas), H, W), np.float32)
         settings = all_orders if all_orders is not None else AllOrdersSettings()
         sun_ms, sky_ms, sun_r, sky_r, m = _all_orders_multiple(volume, camera, med.sun_dir, sigmas, gs, settings,
-                                                               skylight, seed, log)
+                                                               skylight, seed, log, single)
         meta.update(m)
         extra = {"transport": transport, "sun_bands": tuple(settings.sun_bands),
                  "sky_bands": tuple(settings.sky_bands), "sun_ms": sun_ms, "sky_ms": sky_ms,
