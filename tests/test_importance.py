@@ -26,10 +26,14 @@ def _scene(sky=False):
     return vol, Scene(vol, Lighting(SUN, uniform_dome(0.5) if sky else None), st)
 
 
-def _tally(scene, source, window, seed, n=60_000, sigma=1.0, g=0.6):
+def _tally(scene, source, window, seed, n=60_000, sigma=1.0, g=0.6, camera_lobe=0.0):
+    """The four totals the paired tests compare (the cache's bands 2-4 and 5+, the order histogram's light of
+    orders 2-4 and 5+) and the run's collision count."""
     t = trace(scene.med, scene.grid, source, sigma, g, CAM.position, n, BANDS, caches=((4, None),), seed=seed,
-              k_min=1, camera_depth=voxel_camera_depth(scene.med, CAM.position), window=window)
-    return t.numerators[0].sum(axis=(0,)), t.histogram, t.collisions
+              k_min=1, camera_depth=voxel_camera_depth(scene.med, CAM.position), window=window,
+              camera_lobe=camera_lobe)
+    bands = t.numerators[0].sum(axis=0)
+    return np.array([bands[0].sum(), bands[1].sum(), t.histogram[2:5].sum(), t.histogram[5:].sum()]), t.collisions
 
 
 def test_any_window_keeps_the_expected_tallies():
@@ -44,11 +48,9 @@ def test_any_window_keeps_the_expected_tallies():
     window = (4, dims, mi.Float(targets.ravel()))
     ratios, changed = [], False
     for seed in range(8):
-        a, b = _tally(scene, scene.sun, None, seed), _tally(scene, scene.sun, window, seed)
-        fa = [a[0][0].sum(), a[0][1].sum(), a[1][2:5].sum(), a[1][5:].sum()]
-        fb = [b[0][0].sum(), b[0][1].sum(), b[1][2:5].sum(), b[1][5:].sum()]
-        ratios.append(np.array(fb) / np.array(fa))
-        changed |= a[2] != b[2]
+        (fa, ca), (fb, cb) = _tally(scene, scene.sun, None, seed), _tally(scene, scene.sun, window, seed)
+        ratios.append(fb / fa)
+        changed |= ca != cb
     mean = np.mean(ratios, axis=0)
     print("windowed / plain: bands 2-4, 5+; histogram 2-4, 5+:", np.round(mean, 4))
     assert np.all(np.abs(mean - 1) <= [0.03, 0.05, 0.05, 0.06])
@@ -81,15 +83,12 @@ def test_camera_lobe_keeps_the_expected_tallies():
     of the paired means; without the weight HG / q they come out 4-9 times too bright). The lobe must also
     change the walk (other collision counts)."""
     vol, scene = _scene()
-    depth = voxel_camera_depth(scene.med, CAM.position)
     ratios, changed = [], False
     for seed in range(8):
-        a, b = (trace(scene.med, scene.grid, scene.sun, 1.0, 0.85, CAM.position, 200_000, BANDS, caches=((4, None),),
-                      seed=seed, k_min=1, camera_depth=depth, camera_lobe=lobe) for lobe in (0.0, 0.8))
-        fa = [a.numerators[0].sum(0)[0].sum(), a.numerators[0].sum(0)[1].sum(), a.histogram[2:5].sum(), a.histogram[5:].sum()]
-        fb = [b.numerators[0].sum(0)[0].sum(), b.numerators[0].sum(0)[1].sum(), b.histogram[2:5].sum(), b.histogram[5:].sum()]
-        ratios.append(np.array(fb) / np.array(fa))
-        changed |= a.collisions != b.collisions
+        (fa, ca), (fb, cb) = (_tally(scene, scene.sun, None, seed, n=200_000, g=0.85, camera_lobe=lobe)
+                              for lobe in (0.0, 0.8))
+        ratios.append(fb / fa)
+        changed |= ca != cb
     mean = np.mean(ratios, axis=0)
     print("lobe / plain: bands 2-4, 5+; histogram 2-4, 5+:", np.round(mean, 4),
           "standard errors", np.round(np.std(ratios, axis=0) / np.sqrt(7), 4))
