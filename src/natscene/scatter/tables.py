@@ -218,21 +218,22 @@ def _all_orders_multiple(volume, camera, sun_dir, sigmas, gs, settings, sky, see
         for k in counts:
             counts[k] += int(vi.stats.get(k, 0))
         truncated = max(truncated, vi.stats.get("sun_truncated", 0.0))
+        single_sun = hg(cos_q, gs[j]) * single["S_sun"][i]          # the pixel's order 1 over beta
         for b in NOISE_BETAS:
             cs = band_weights(sb, vi.sun_ratios, b)[0]
             ck = band_weights(kb, vi.sky_ratios, b)[0]
             halves = [np.tensordot(cs, vi.sun_halves[h], 1) for h in range(2)]
             sky_halves = [np.tensordot(ck, vi.sky_halves[h][:3].sum(0), 1) for h in range(2)]
             both = [halves[h] + np.tensordot(ck, np.tensordot(sky_w, vi.sky_halves[h], 1), 1) for h in range(2)]
-            for key, (x, y) in ((f"sun.beta{b:g}", halves), (f"sky.beta{b:g}", sky_halves),
-                                (f"sun_and_sky.beta{b:g}", both)):
+            for part, (x, y) in (("sun", halves), ("sky", sky_halves), ("sun_and_sky", both)):
                 m = (x + y) / 2
                 se = standard_error(x, y)
                 ok = foot & (m > 0)
-                noise[key].append((se[ok] / m[ok]).astype(np.float32))
-            pixel = b * hg(cos_q, gs[j]) * single["S_sun"][i] + m         # m, se: of the two together
-            ok = foot & (pixel > 0)
-            noise[f"pixel.beta{b:g}"].append((se[ok] / pixel[ok]).astype(np.float32))
+                noise[f"{part}.beta{b:g}"].append((se[ok] / m[ok]).astype(np.float32))
+                if part == "sun_and_sky":          # the same error over the composed cloud pixel
+                    pixel = b * single_sun + m
+                    ok = foot & (pixel > 0)
+                    noise[f"pixel.beta{b:g}"].append((se[ok] / pixel[ok]).astype(np.float32))
         el = time.perf_counter() - t0
         log(f"all orders sigma_t={sigmas[i]:g} g={gs[j]:g}: {vi.stats.get('sun_photons', 0)} sun + "
             f"{vi.stats.get('sky_photons', 0)} sky photons ({n + 1}/{len(todo)}, {el:.0f} s, "
