@@ -21,6 +21,21 @@ def test_bundled_configs_are_valid(name):
     validate_config(load_yaml_config(ROOT / "config" / name), SCHEMA)
 
 
+def test_gpu_overlay_merges_onto_the_main_job():
+    """config/gpu.yaml is an overlay (two --configfile arguments): merged the way Snakemake merges them, the
+    main job keeps its sections and gets 16x its photon budget, and the result is valid."""
+    from snakemake.utils import update_config
+    main = load_yaml_config(ROOT / "config" / "config.yaml")
+    cfg = copy.deepcopy(main)
+    update_config(cfg, load_yaml_config(ROOT / "config" / "gpu.yaml"))
+    cfg = validate_config(cfg, SCHEMA)
+    ao, main_ao = cfg["precompute"]["all_orders"], main["precompute"]["all_orders"]
+    assert cfg["precompute"]["pairs"] == main["precompute"]["pairs"] and cfg["volumes"] == \
+        validate_config(copy.deepcopy(main), SCHEMA)["volumes"]
+    assert ao["sun_collisions"] == 16 * main_ao["sun_collisions"]
+    assert ao["sky_collisions"] == 16 * main_ao["sky_collisions"]
+
+
 def test_defaults_are_filled_inside_referenced_sections(smoke):
     cfg = validate_config(copy.deepcopy(smoke), SCHEMA)
     vol = cfg["volumes"]["tiny"]

@@ -33,6 +33,10 @@ def main():
     ap.add_argument("--dump-config", help="write the validated main config as JSON and stop")
     ap.add_argument("--config-json", help="the validated main config (from --dump-config)")
     ap.add_argument("--out", default=str(ROOT / "results" / "benchmarks"))
+    ap.add_argument("--budget-scales", help="instead: the noise and time of the nodes sigma_t 0.5 and 1 (g 0.85) "
+                    "with the collision budgets times each of these comma-separated factors, then the whole "
+                    "precompute at the largest factor if it fits in --budget-s seconds")
+    ap.add_argument("--budget-s", type=float, default=300.0)
     a = ap.parse_args()
     if a.dump_config:
         Path(a.dump_config).write_text(json.dumps(validated_config(), default=str))
@@ -62,6 +66,9 @@ def main():
     vol, _ = build_volume(cfg["volumes"]["cumulus"], "cumulus")
     pre = cfg["precompute"]
     st = settings_from_config(pre)
+    if a.budget_scales:
+        return budget_study(res, dump, vol, camera, sun, pre, st, [float(x) for x in a.budget_scales.split(",")],
+                            a.budget_s)
     scene = Scene(vol, Lighting(np.asarray(sun, np.float64), skylight_dome(sun, pre.get("skylight"))), st)
     for rep in range(2):
         t0 = time.perf_counter()
@@ -95,6 +102,44 @@ def main():
             np.save(out / "frame640.npy", o["raw"].astype(np.float16))
         print(w, h, res[f"frame_{w}x{h}_s"], flush=True)
         dump()
+
+
+def budget_study(res, dump, vol, camera, sun, pre, st, scales, budget_s):
+    """Noise figures (the meta's ``pixel_relative_standard_error``) and time of the precompute on the nodes
+    (0.5, 0.85) and (1, 0.85) with the sun's and the sky's collision budgets (and photon caps) scaled; then the
+    main job's whole grid at the largest scale when the two nodes' time, scaled to the grid, fits ``budget_s``."""
+    import dataclasses
+    import time
+
+    from natscene.scatter.tables import precompute
+
+    def run(scale, sigmas, gs):
+        s = dataclasses.replace(st, sun_collisions=int(st.sun_collisions * scale),
+                                sky_collisions=int(st.sky_collisions * scale),
+                                sun_photons_max=int(st.sun_photons_max * scale),
+                                sky_photons_max=int(st.sky_photons_max * scale))
+        t0 = time.perf_counter()
+        tables = precompute(vol, camera, sun, sigmas=sigmas, gs=gs, seed=pre["seed"], step_voxels=pre["step_voxels"],
+                            supersample=pre["supersample"], rho_threshold=pre["rho_threshold"],
+                            transport="all_orders", all_orders=s, skylight=pre.get("skylight"), log=print)
+        noise = tables.meta["pixel_relative_standard_error"]
+        return round(time.perf_counter() - t0, 1), {k: [round(v["median"], 4), round(v["p95"], 4)]
+                                                     for k, v in noise.items()}, tables.meta["photons"]
+
+    run(0.05, [0.0, 0.5], [0.85])                         # compiles the kernels
+    for scale in scales:
+        s, noise, photons = run(scale, [0.0, 0.5, 1.0], [0.85])
+        res[f"nodes_x{scale:g}"] = {"s": s, "noise": noise, "photons": photons}
+        print(scale, s, noise, flush=True)
+        dump()
+    top = max(scales)
+    nodes = sum(1 for x in pre["sigma_t"] if x > 0) * len(pre["g"])
+    estimate = res[f"nodes_x{top:g}"]["s"] / 2 * nodes
+    res["grid_estimate_s"] = round(estimate, 1)
+    if estimate <= budget_s:
+        s, noise, photons = run(top, pre["sigma_t"], pre["g"])
+        res[f"grid_x{top:g}"] = {"s": s, "noise": noise, "photons": photons}
+    dump()
 
 
 if __name__ == "__main__":
