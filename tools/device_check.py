@@ -2,7 +2,8 @@
 where a CUDA GPU works): one all-orders precompute node (σ_t 0.5, g 0.85, twice: the first compiles the
 kernels), the main job's whole precompute (cumulus, ``kite`` view), and the day frame of ``day_to_sunset`` at
 640×480 and 1920×1080 (raw: no denoiser). Writes ``<out>/device_check.json`` and the raw 640×480 frame
-(``frame640.npy``, float16) to compare with a CPU render of the same frame.
+(``frame640.npy``, float16) to compare with a CPU render of the same frame. With ``--budget-scales 1,4,8,16``
+instead: the precompute's noise figures and time against the photon budget (:func:`budget_study`).
 
 A GPU machine may lack the workflow's tools (Snakemake, jsonschema, OIDN): validate the config where they are
 installed and carry the JSON along:
@@ -114,14 +115,14 @@ def budget_study(res, dump, vol, camera, sun, pre, st, scales, budget_s):
     from natscene.scatter.tables import precompute
 
     def run(scale, sigmas, gs):
-        s = dataclasses.replace(st, sun_collisions=int(st.sun_collisions * scale),
+        scaled = dataclasses.replace(st, sun_collisions=int(st.sun_collisions * scale),
                                 sky_collisions=int(st.sky_collisions * scale),
                                 sun_photons_max=int(st.sun_photons_max * scale),
                                 sky_photons_max=int(st.sky_photons_max * scale))
         t0 = time.perf_counter()
         tables = precompute(vol, camera, sun, sigmas=sigmas, gs=gs, seed=pre["seed"], step_voxels=pre["step_voxels"],
                             supersample=pre["supersample"], rho_threshold=pre["rho_threshold"],
-                            transport="all_orders", all_orders=s, skylight=pre.get("skylight"), log=print)
+                            transport="all_orders", all_orders=scaled, skylight=pre.get("skylight"), log=print)
         noise = tables.meta["pixel_relative_standard_error"]
         return round(time.perf_counter() - t0, 1), {k: [round(v["median"], 4), round(v["p95"], 4)]
                                                      for k, v in noise.items()}, tables.meta["photons"]
