@@ -57,7 +57,7 @@ def main():
     from natscene.geometry import Camera, sun_direction
     from natscene.keyframes.frame import render_shot_frame
     from natscene.scatter.allorders import Lighting, Scene, settings_from_config, view_images
-    from natscene.scatter.tables import precompute, skylight_dome
+    from natscene.scatter.tables import skylight_dome
     from natscene.volume.build import build_volume
     from shots import PARAMS, _state
 
@@ -80,10 +80,7 @@ def main():
         print(rep, res[f"node_s_{rep}"], vi.stats, flush=True)
         dump()
     t0 = time.perf_counter()
-    tables = precompute(vol, camera, sun, sigmas=pre["sigma_t"], gs=pre["g"], n_m=pre["n_m"], spp=pre["spp"],
-                        seed=pre["seed"], step_voxels=pre["step_voxels"], supersample=pre["supersample"],
-                        rho_threshold=pre["rho_threshold"], transport="all_orders", all_orders=st,
-                        skylight=pre.get("skylight"), log=print)
+    tables = all_orders_precompute(vol, camera, sun, pre, st, pre["sigma_t"], pre["g"])
     res["precompute_main_job_s"] = round(time.perf_counter() - t0, 1)
     res["precompute_noise"] = tables.meta.get("pixel_relative_standard_error")
     dump()
@@ -105,27 +102,30 @@ def main():
         dump()
 
 
+def all_orders_precompute(vol, camera, sun, pre, settings, sigmas, gs):
+    """The precompute of the validated ``precompute`` section ``pre`` with all-orders ``settings`` on a grid."""
+    from natscene.scatter.tables import precompute
+    return precompute(vol, camera, sun, sigmas=sigmas, gs=gs, seed=pre["seed"], step_voxels=pre["step_voxels"],
+                      supersample=pre["supersample"], rho_threshold=pre["rho_threshold"], transport="all_orders",
+                      all_orders=settings, skylight=pre.get("skylight"), log=print)
+
+
 def budget_study(res, dump, vol, camera, sun, pre, st, scales, budget_s):
     """Noise figures (the meta's ``pixel_relative_standard_error``) and time of the precompute on the nodes
     (0.5, 0.85) and (1, 0.85) with the sun's and the sky's collision budgets (and photon caps) scaled; then the
     main job's whole grid at the largest scale when the two nodes' time, scaled to the grid, fits ``budget_s``."""
     import dataclasses
-    import time
-
-    from natscene.scatter.tables import precompute
 
     def run(scale, sigmas, gs):
         scaled = dataclasses.replace(st, sun_collisions=int(st.sun_collisions * scale),
-                                sky_collisions=int(st.sky_collisions * scale),
-                                sun_photons_max=int(st.sun_photons_max * scale),
-                                sky_photons_max=int(st.sky_photons_max * scale))
+                                     sky_collisions=int(st.sky_collisions * scale),
+                                     sun_photons_max=int(st.sun_photons_max * scale),
+                                     sky_photons_max=int(st.sky_photons_max * scale))
         t0 = time.perf_counter()
-        tables = precompute(vol, camera, sun, sigmas=sigmas, gs=gs, seed=pre["seed"], step_voxels=pre["step_voxels"],
-                            supersample=pre["supersample"], rho_threshold=pre["rho_threshold"],
-                            transport="all_orders", all_orders=scaled, skylight=pre.get("skylight"), log=print)
-        noise = tables.meta["pixel_relative_standard_error"]
-        return round(time.perf_counter() - t0, 1), {k: [round(v["median"], 4), round(v["p95"], 4)]
-                                                     for k, v in noise.items()}, tables.meta["photons"]
+        meta = all_orders_precompute(vol, camera, sun, pre, scaled, sigmas, gs).meta
+        return (round(time.perf_counter() - t0, 1), {k: [round(v["median"], 4), round(v["p95"], 4)]
+                                                      for k, v in meta["pixel_relative_standard_error"].items()},
+                meta["photons"])
 
     run(0.05, [0.0, 0.5], [0.85])                         # compiles the kernels
     for scale in scales:
@@ -141,7 +141,6 @@ def budget_study(res, dump, vol, camera, sun, pre, st, scales, budget_s):
         s, noise, photons = run(top, pre["sigma_t"], pre["g"])
         res[f"grid_x{top:g}"] = {"s": s, "noise": noise, "photons": photons}
     dump()
-
 
 if __name__ == "__main__":
     main()
