@@ -329,6 +329,38 @@ def test_mip_pyramid_keeps_the_mean():
         assert m.levels[-1].shape[:2] == (1, 1)
 
 
+def test_lookup_is_the_textbook_bilinear_formula():
+    """Point lookups against the bilinear formula evaluated by hand: at texel centres the texel itself; between
+    four texels of a clamped image the weights (1 − fx)(1 − fy), fx(1 − fy), (1 − fx)fy, fx·fy; with wrap the
+    right neighbour of the last column is column 0. An atlas of two images picks each sample's image."""
+    rng = np.random.default_rng(3)
+    a = rng.random((5, 7, 2)).astype(np.float32)
+    b = rng.random((4, 3, 2)).astype(np.float32)
+    m = MipTexture(a)
+    i, j = np.meshgrid(np.arange(5), np.arange(7), indexing="ij")
+    centres = np.stack([(j.ravel() + 0.5) / 7, 1 - (i.ravel() + 0.5) / 5], -1)
+    np.testing.assert_allclose(m.bilinear(centres), a.reshape(-1, 2), rtol=1e-6)
+    fx, fy = 0.3, 0.8  # a point between texels (row 1, col 2) and (row 2, col 3)
+    uv = np.array([[(2.5 + fx) / 7, 1 - (1.5 + fy) / 5]])
+    want = ((1 - fx) * (1 - fy) * a[1, 2] + fx * (1 - fy) * a[1, 3] + (1 - fx) * fy * a[2, 2] + fx * fy * a[2, 3])
+    np.testing.assert_allclose(m.bilinear(uv)[0], want, rtol=1e-5)
+    w = MipTexture(a, wrap=True)
+    uv = np.array([[(6.5 + fx) / 7, 1 - 2.5 / 5]])
+    np.testing.assert_allclose(w.bilinear(uv)[0], (1 - fx) * a[2, 6] + fx * a[2, 0], rtol=1e-5)
+    at = MipTexture.atlas([a, b])
+    pts = np.array([[0.5 / 7, 1 - 0.5 / 5], [2.5 / 3, 1 - 3.5 / 4]])
+    np.testing.assert_allclose(at.bilinear(pts, np.array([0, 1])), np.stack([a[0, 0], b[3, 2]]), rtol=1e-6)
+
+
+def test_filtered_lookup_of_a_constant_texture_is_the_constant():
+    """Every probe of a constant texture returns the constant, whatever the footprint (the probes' mean)."""
+    rng = np.random.default_rng(4)
+    m = MipTexture(np.full((64, 32, 3), 0.375, np.float32), wrap=True)
+    uv = rng.random((500, 2)) * 5
+    dx, dy = rng.normal(size=(500, 2)) * 0.2, rng.normal(size=(500, 2)) * 0.01
+    np.testing.assert_array_equal(m.filtered(uv, dx, dy, 16), 0.375)
+
+
 # ------------------------------------------------------------------------------------------- sky dome
 def test_sky_dome_irradiance():
     """SH9 irradiance (Ramamoorthi & Hanrahan 2001): exact for a constant sky (E = π L for every normal); for a

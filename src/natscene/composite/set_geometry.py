@@ -18,6 +18,7 @@ import numpy as np
 
 from natscene.composite.footprint import texture_derivatives
 from natscene.composite.set_spec import SetSpec
+from natscene.composite.texture import MipTexture
 from natscene.composite.tracer import SetTracer, ground_hits
 from natscene.spectral.grid import spectrum_to_rgb
 
@@ -83,6 +84,11 @@ class SetGeometry:
             self.sun_rgb = np.zeros(3, np.float32)
             self.sun_S = np.zeros_like(self.sun_S)
         self.translucency = np.array([s.translucency for s in spec.surfaces] + [0.0], np.float32)
+        cut = [i for i, s in enumerate(spec.surfaces) if s.cutout and s.texture is not None]
+        self._cut_slot = np.full(len(spec.surfaces) + 1, -1, np.int64)  # surface -> image of the alpha atlas
+        self._cut_slot[cut] = np.arange(len(cut))
+        self._cut_alpha = MipTexture.atlas([spec.surfaces[i].texture.levels[0][..., -1:] for i in cut]) \
+            if cut else None
         self.timing = {"geometry": 0.0, "shading": 0.0}
 
     def _classify(self, label):
@@ -90,14 +96,13 @@ class SetGeometry:
         return self.kind_of[lab], self.index_of[lab]
 
     def _cut(self, index: np.ndarray, uv: np.ndarray) -> np.ndarray:
-        """Whether surface samples fall in a transparent part of their cut-out texture."""
+        """Whether surface samples fall in a transparent part (alpha < 0.5) of their cut-out texture (one
+        lookup in the atlas of the cut-out textures' alpha channels)."""
         drop = np.zeros(index.size, bool)
-        for i, s in enumerate(self.spec.surfaces):
-            if not s.cutout or s.texture is None:
-                continue
-            m = index == i
-            if m.any():
-                drop[m] = s.texture.bilinear(uv[m])[:, -1] < 0.5
+        slot = self._cut_slot[index]
+        m = np.flatnonzero(slot >= 0)
+        if m.size:
+            drop[m] = self._cut_alpha.bilinear(uv[m], slot[m])[:, 0] < 0.5
         return drop
 
     def _mesh_hits(self, origins: np.ndarray, dirs: np.ndarray) -> dict:
@@ -224,17 +229,17 @@ class SetGeometry:
         th = np.tan(np.radians(cam.fov) / 2)
         ex = right * (2 * th * (W / H) / W * step)
         ey = -up * (2 * th / H * step)
-        d, dx, dy = [], [], []
-        for off in offs:
+        d, dx, dy = (np.empty((offs.shape[0], H * W, 3)) for _ in range(3))
+        for s, off in enumerate(offs):
             jj, ii = np.meshgrid(np.arange(W) + 0.5 + off[0], np.arange(H) + 0.5 + off[1])
             x = ((2 * jj / W - 1) * th * (W / H)).reshape(-1, 1)
             y = ((1 - 2 * ii / H) * th).reshape(-1, 1)
             D = x * right + y * up + fwd
             L = np.linalg.norm(D, axis=-1, keepdims=True)
-            d.append(D / L)
-            dx.append((D + ex) / L)
-            dy.append((D + ey) / L)
-        return np.stack(d), np.stack(dx), np.stack(dy)
+            np.divide(D, L, out=d[s])
+            np.divide(D + ex, L, out=dx[s])
+            np.divide(D + ey, L, out=dy[s])
+        return d, dx, dy
 
     def blocks(self, block_rays: int = 1 << 17):
         """Yield (pixel slice, dirs, ddx, ddy), the directions (spp·n, 3) sample-major, over blocks of pixels."""

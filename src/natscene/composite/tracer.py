@@ -2,8 +2,9 @@
 analytically.
 
 The meshes go into one Mitsuba scene (RGB variant; meshes built in memory with ``mi.Mesh`` and
-``mi.traverse``); a query is one fused Dr.Jit kernel whose fields (shape, validity, distance, position,
-geometric and shading normals, uv, ∂p/∂u, ∂p/∂v) are evaluated together before they are copied to numpy.
+``mi.traverse``); a query is one fused Dr.Jit kernel whose fields (shape, validity, distance, geometric and
+shading normals, uv, ∂p/∂u, ∂p/∂v) are evaluated together; only the hits' fields are copied to numpy (most
+camera rays see the sky or the ground).
 The ground is not a mesh: a plane to the horizon in float32 would lose the centimetres of the near field at
 kilometres of extent, so its hit is t = −o_y / d_y in float64 (d_y < 0) and its texture coordinates are
 (x, z) divided by the texture's extent in metres.
@@ -56,8 +57,9 @@ class SetTracer:
         return mi.Ray3f(mi.Point3f(o[0], o[1], o[2]), mi.Vector3f(v[0], v[1], v[2]))
 
     def intersect(self, origins: np.ndarray, dirs: np.ndarray) -> dict:
-        """Closest mesh hits of rays (M, 3): ``label`` (M,) shape index or -1, ``t``, ``p``, ``n`` (geometric
-        normal), ``sn`` (shading normal), both facing the ray origin, ``uv``, ``dp_du``, ``dp_dv``."""
+        """Closest mesh hits of rays (M, 3): ``label`` (M,) shape index or -1, ``t`` (inf: none), ``n``
+        (geometric normal), ``sn`` (shading normal), both facing the ray origin, ``uv``, ``dp_du``, ``dp_dv``
+        (zero for misses)."""
         M = np.shape(dirs)[0]
         if M == 0 or self.n_shapes == 0 or self._label_of_id.size == 1 and self._label_of_id[0] < 0:
             return _empty_hits(M)
@@ -65,17 +67,22 @@ class SetTracer:
         si = self.scene.ray_intersect(self._rays(origins, dirs))
         sid = dr.reinterpret_array(mi.UInt32, si.shape)
         valid = si.is_valid()
-        dr.eval(sid, valid, si.t, si.p, si.n, si.sh_frame.n, si.uv, si.dp_du, si.dp_dv)
-        valid = np.asarray(valid, bool)
-        idx = np.minimum(np.asarray(sid, np.int64), self._label_of_id.size - 1)
-        label = np.where(valid, self._label_of_id[idx], -1)
-        out = {"label": label, "t": np.where(valid, np.asarray(si.t, np.float64), np.inf)}
-        for key, val in (("p", si.p), ("n", si.n), ("sn", si.sh_frame.n), ("dp_du", si.dp_du), ("dp_dv", si.dp_dv)):
-            out[key] = np.asarray(val, np.float32).T.copy()
-        out["uv"] = np.asarray(si.uv, np.float32).T.copy()
-        d = np.asarray(dirs, np.float32)
+        fields = {"t": si.t, "n": si.n, "sn": si.sh_frame.n, "uv": si.uv, "dp_du": si.dp_du, "dp_dv": si.dp_dv}
+        dr.eval(sid, valid, *fields.values())
+        hit = dr.compress(valid)  # most rays miss the meshes (sky, ground): copy out the hits only
+        out = _empty_hits(M)
+        if dr.width(hit) == 0:
+            return out
+        hi = np.asarray(hit, np.int64)
+        idx = np.minimum(np.asarray(dr.gather(mi.UInt32, sid, hit), np.int64), self._label_of_id.size - 1)
+        out["label"][hi] = self._label_of_id[idx]
+        out["t"][hi] = np.asarray(dr.gather(mi.Float, si.t, hit), np.float64)
+        for key in ("n", "sn", "uv", "dp_du", "dp_dv"):
+            val = fields[key]
+            out[key][hi] = np.asarray(dr.gather(type(val), val, hit), np.float32).T
+        d = np.asarray(dirs, np.float32)[hi]
         for key in ("n", "sn"):
-            flip = np.einsum("ij,ij->i", out[key], d) > 0
+            flip = hi[np.einsum("ij,ij->i", out[key][hi], d) > 0]
             out[key][flip] *= -1
         return out
 
@@ -91,9 +98,9 @@ class SetTracer:
 
 
 def _empty_hits(M: int) -> dict:
-    z3 = np.zeros((M, 3), np.float32)
-    return {"label": np.full(M, -1, np.int64), "t": np.full(M, np.inf), "p": z3, "n": z3.copy(), "sn": z3.copy(),
-            "uv": np.zeros((M, 2), np.float32), "dp_du": z3.copy(), "dp_dv": z3.copy()}
+    return {"label": np.full(M, -1, np.int64), "t": np.full(M, np.inf), "n": np.zeros((M, 3), np.float32),
+            "sn": np.zeros((M, 3), np.float32), "uv": np.zeros((M, 2), np.float32),
+            "dp_du": np.zeros((M, 3), np.float32), "dp_dv": np.zeros((M, 3), np.float32)}
 
 
 def ground_hits(origin, dirs: np.ndarray) -> np.ndarray:
