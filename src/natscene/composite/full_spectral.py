@@ -7,8 +7,9 @@ light-material interaction is a per-band product, on every sample and every boun
 Preprocessing and rendering (the preprocessing timed with the render): every RGB input becomes spectra with the
 hybrid's published upsampling (:mod:`natscene.spectral.upsampling`), each by the cheaper of two equivalent
 routes (:class:`SpectralInputs`): once per entry (the background plate per pixel, the surfaces' colours, Dong's
-highlight, κ_a as a per-band extinction) or per lookup (texture values filtered in RGB, the sky's radiance and
-the sky dome's irradiance: upsampled per sample; identical for the linear Mallett-Yuksel method). The sun is
+highlight, κ_a as a per-band extinction, the sky dome's irradiance on the flat ground) or per lookup (texture
+values filtered in RGB, the sky's radiance and the sky dome's irradiance on the meshes: upsampled per sample;
+identical for the linear Mallett-Yuksel method). The sun is
 its SPD. Every sample is shaded on the grid as ρ(λ)/π·(E_sun(λ)·cos·V + E_sky(n, λ)) (+ translucency), hazed
 by e^{−κ(λ)t} toward L_sky(λ), films as R(θ_v, λ)·L_env(λ) + (R(θ_d, λ) + highlight(λ))·E_sun(λ)·lobe with
 L_env the *spectral* radiance the mirror ray gathers; the pixel spectra are integrated to XYZ -> linear sRGB
@@ -78,7 +79,11 @@ def _radiance(r: SetRenderer, inp: SpectralInputs, h: Hits, sel: np.ndarray, coa
     rho = _albedo(r, inp, h, sel, coarse)
     surf = (h.kind[sel] == KIND_SURFACE)
     n = h.n[sel]
-    E = r.sun_S[None] * h.sun_front[sel, None] + inp.irradiance(n)
+    ground = h.kind[sel] == KIND_GROUND  # the ground's normal is up: one sky-dome spectrum for all of it
+    E_sky = np.empty((sel.size, inp.grid.size), np.float32)
+    E_sky[ground] = inp.irradiance(np.array([[0.0, 1.0, 0.0]]))
+    E_sky[~ground] = inp.irradiance(n[~ground])
+    E = r.sun_S[None] * h.sun_front[sel, None] + E_sky
     tr = np.where(surf, r.translucency[np.where(surf, h.index[sel], -1)], 0.0)
     back = np.flatnonzero(tr > 0)
     if back.size:

@@ -114,7 +114,11 @@ class SetRenderer(SetGeometry):
     def irradiance_rgb(self, h: Hits, sel: np.ndarray) -> np.ndarray:
         """Irradiance (len(sel), 3) on the front side plus τ times the back side's (sun and sky dome)."""
         n = h.n[sel]
-        E = self.sun_rgb[None] * h.sun_front[sel, None] + self.dome.irradiance(n)
+        ground = h.kind[sel] == KIND_GROUND  # the ground's normal is up: one sky-dome evaluation for all of it
+        E_sky = np.empty((sel.size, 3), np.float32)
+        E_sky[ground] = self.dome.irradiance(np.array([[0.0, 1.0, 0.0]]))
+        E_sky[~ground] = self.dome.irradiance(n[~ground])
+        E = self.sun_rgb[None] * h.sun_front[sel, None] + E_sky
         tr = np.where(h.kind[sel] == KIND_SURFACE, self.translucency[np.where(h.kind[sel] == KIND_SURFACE,
                                                                                 h.index[sel], -1)], 0.0)
         back = np.flatnonzero(tr > 0)

@@ -218,36 +218,41 @@ class SetGeometry:
         hits = self.trace(h.p[m] + h.ng[m] * EPS * 5, refl)
         return MirrorHits(cos_v.astype(np.float32), cos_d.astype(np.float32), nh.astype(np.float32), hits)
 
-    def camera_rays(self):
+    def camera_rays(self, a: int = 0, b: int | None = None):
         """Unit directions and their x/y neighbour directions (one sample spacing right and down; not normalised,
-        which the footprint's plane intersections do not need), each (spp, H·W, 3), for the stratified samples."""
+        which the footprint's plane intersections do not need), each (spp·n, 3) sample-major, for the stratified
+        samples of the pixels a..b (row-major; b None: all)."""
         cam = self.spec.camera
         H, W = cam.height, cam.width
+        b = H * W if b is None else b
         offs = stratified_offsets(self.spec.spp)
         step = 1.0 / int(np.ceil(np.sqrt(self.spec.spp)))
         right, up, fwd = cam.basis()
         th = np.tan(np.radians(cam.fov) / 2)
         ex = right * (2 * th * (W / H) / W * step)
         ey = -up * (2 * th / H * step)
-        d, dx, dy = (np.empty((offs.shape[0], H * W, 3)) for _ in range(3))
+        n = b - a
+        d, dx, dy = (np.empty((offs.shape[0] * n, 3)) for _ in range(3))
+        row, col = np.divmod(np.arange(a, b), W)
+        col, row = col.astype(np.float64), row.astype(np.float64)
         for s, off in enumerate(offs):
-            jj, ii = np.meshgrid(np.arange(W) + 0.5 + off[0], np.arange(H) + 0.5 + off[1])
-            x = ((2 * jj / W - 1) * th * (W / H)).reshape(-1, 1)
-            y = ((1 - 2 * ii / H) * th).reshape(-1, 1)
+            x = ((2 * (col + 0.5 + off[0]) / W - 1) * th * (W / H))[:, None]
+            y = ((1 - 2 * (row + 0.5 + off[1]) / H) * th)[:, None]
             D = x * right + y * up + fwd
             L = np.linalg.norm(D, axis=-1, keepdims=True)
-            np.divide(D, L, out=d[s])
-            np.divide(D + ex, L, out=dx[s])
-            np.divide(D + ey, L, out=dy[s])
+            k = slice(s * n, (s + 1) * n)
+            np.divide(D, L, out=d[k])
+            np.divide(D + ex, L, out=dx[k])
+            np.divide(D + ey, L, out=dy[k])
         return d, dx, dy
 
     def blocks(self, block_rays: int = 1 << 17):
         """Yield (pixel slice, dirs, ddx, ddy), the directions (spp·n, 3) sample-major, over blocks of pixels."""
-        t0 = time.perf_counter()
-        d, dx, dy = self.camera_rays()
-        self.timing["geometry"] += time.perf_counter() - t0
-        spp, P = d.shape[:2]
-        step = max(1, block_rays // spp)
+        P = self.spec.camera.height * self.spec.camera.width
+        step = max(1, block_rays // self.spec.spp)
         for a in range(0, P, step):
             b = min(P, a + step)
-            yield slice(a, b), d[:, a:b].reshape(-1, 3), dx[:, a:b].reshape(-1, 3), dy[:, a:b].reshape(-1, 3)
+            t0 = time.perf_counter()
+            d, dx, dy = self.camera_rays(a, b)
+            self.timing["geometry"] += time.perf_counter() - t0
+            yield slice(a, b), d, dx, dy
