@@ -81,7 +81,6 @@ class MipTexture:
         self.heights = np.array([l.shape[0] for l in levels], np.int64)
         self.widths = np.array([l.shape[1] for l in levels], np.int64)
         self.offsets = np.concatenate([[0], np.cumsum(self.heights * self.widths)[:-1]]).astype(np.int64)
-        self.flat = np.concatenate([l.reshape(-1, self.channels) for l in levels])
         self.max_level = len(levels) - 1
 
     @property
@@ -101,7 +100,8 @@ class MipTexture:
             if mi.variant() is None:
                 from natscene.variant import select_variant
                 select_variant(spectral=False)
-            self._jit = (mi, mi.Float(self.flat.ravel()), mi.UInt32(self.widths.astype(np.uint32)),
+            flat = np.concatenate([l.reshape(-1) for l in self.levels])  # all levels, one table
+            self._jit = (mi, mi.Float(flat), mi.UInt32(self.widths.astype(np.uint32)),
                          mi.UInt32(self.heights.astype(np.uint32)), mi.UInt32(self.offsets.astype(np.uint32)))
         return self._jit
 
