@@ -352,6 +352,17 @@ def test_lookup_is_the_textbook_bilinear_formula():
     np.testing.assert_allclose(at.bilinear(pts, np.array([0, 1])), np.stack([a[0, 0], b[3, 2]]), rtol=1e-6)
 
 
+def test_lookup_far_outside_a_clamped_texture_is_its_edge():
+    """Clamp-to-edge for coordinates far outside [0, 1] (a probe line of a grazing footprint): the edge
+    texels, as the formula says, whatever the distance; a non-finite coordinate gives a finite value."""
+    a = np.arange(12, dtype=np.float32).reshape(3, 4, 1)
+    m = MipTexture(a)
+    uv = np.array([[-1e12, 0.5], [1e12, 0.5], [0.125, 1e12], [0.125, -1e12], [np.nan, 0.5]])
+    v = m.bilinear(uv)[:, 0]
+    np.testing.assert_array_equal(v[:4], [a[1, 0, 0], a[1, 3, 0], a[0, 0, 0], a[2, 0, 0]])
+    assert np.isfinite(v[4])
+
+
 def test_filtered_lookup_of_a_constant_texture_is_the_constant():
     """Every probe of a constant texture returns the constant, whatever the footprint (the probes' mean)."""
     rng = np.random.default_rng(4)

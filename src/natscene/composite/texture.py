@@ -131,8 +131,12 @@ class MipTexture:
         def bilinear(u, v, size):
             w, h, off = size
             wi, hi = mi.Int32(w), mi.Int32(h)
+            # clamped to [-1, size] before the integer conversion (far probes; NaN -> -1), the result that of
+            # the unclamped coordinate (beyond the edge both neighbours are the edge texel)
             x = u * mi.Float(w) - 0.5
             y = (1.0 - v) * mi.Float(h) - 0.5
+            x = dr.select(x >= -1.0, dr.minimum(x, mi.Float(w)), -1.0)
+            y = dr.select(y >= -1.0, dr.minimum(y, mi.Float(h)), -1.0)
             xf, yf = dr.floor(x), dr.floor(y)
             fx, fy = x - xf, y - yf
             x0, y0 = mi.Int32(xf), mi.Int32(yf)
