@@ -79,11 +79,7 @@ def _radiance(r: SetRenderer, inp: SpectralInputs, h: Hits, sel: np.ndarray, coa
     rho = _albedo(r, inp, h, sel, coarse)
     surf = (h.kind[sel] == KIND_SURFACE)
     n = h.n[sel]
-    ground = h.kind[sel] == KIND_GROUND  # the ground's normal is up: one sky-dome spectrum for all of it
-    E_sky = np.empty((sel.size, inp.grid.size), np.float32)
-    E_sky[ground] = inp.irradiance(np.array([[0.0, 1.0, 0.0]]))
-    E_sky[~ground] = inp.irradiance(n[~ground])
-    E = r.sun_S[None] * h.sun_front[sel, None] + E_sky
+    E = r.sun_S[None] * h.sun_front[sel, None] + r.sky_irradiance(h, sel, inp.irradiance)
     tr = np.where(surf, r.translucency[np.where(surf, h.index[sel], -1)], 0.0)
     back = np.flatnonzero(tr > 0)
     if back.size:

@@ -114,11 +114,7 @@ class SetRenderer(SetGeometry):
     def irradiance_rgb(self, h: Hits, sel: np.ndarray) -> np.ndarray:
         """Irradiance (len(sel), 3) on the front side plus τ times the back side's (sun and sky dome)."""
         n = h.n[sel]
-        ground = h.kind[sel] == KIND_GROUND  # the ground's normal is up: one sky-dome evaluation for all of it
-        E_sky = np.empty((sel.size, 3), np.float32)
-        E_sky[ground] = self.dome.irradiance(np.array([[0.0, 1.0, 0.0]]))
-        E_sky[~ground] = self.dome.irradiance(n[~ground])
-        E = self.sun_rgb[None] * h.sun_front[sel, None] + E_sky
+        E = self.sun_rgb[None] * h.sun_front[sel, None] + self.sky_irradiance(h, sel, self.dome.irradiance)
         tr = np.where(h.kind[sel] == KIND_SURFACE, self.translucency[np.where(h.kind[sel] == KIND_SURFACE,
                                                                                 h.index[sel], -1)], 0.0)
         back = np.flatnonzero(tr > 0)
@@ -126,6 +122,17 @@ class SetRenderer(SetGeometry):
             Eb = self.sun_rgb[None] * h.sun_back[sel[back], None] + self.dome.irradiance(-n[back])
             E[back] += tr[back, None] * Eb
         return E
+
+    @staticmethod
+    def sky_irradiance(h: Hits, sel: np.ndarray, irradiance) -> np.ndarray:
+        """``irradiance(normals)`` (the sky dome's, RGB or spectral) of samples ``sel``: one evaluation for all
+        ground samples (the flat ground's normal is up), one per mesh sample."""
+        ground = h.kind[sel] == KIND_GROUND
+        up = irradiance(np.array([[0.0, 1.0, 0.0]]))
+        out = np.empty((sel.size, up.shape[-1]), np.float32)
+        out[ground] = up
+        out[~ground] = irradiance(h.n[sel[~ground]])
+        return out
 
     def transmittance(self, h: Hits, sel: np.ndarray) -> np.ndarray:
         """e^{-κ_a t / d_ref} (len(sel), 3) of Dobashi Eq. 3 over the samples' distances (1 without air)."""
