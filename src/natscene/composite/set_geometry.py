@@ -85,7 +85,7 @@ class SetGeometry:
             self.sun_S = np.zeros_like(self.sun_S)
         self.translucency = np.array([s.translucency for s in spec.surfaces] + [0.0], np.float32)
         cut = [i for i, s in enumerate(spec.surfaces) if s.cutout and s.texture is not None]
-        self._cut_slot = np.full(len(spec.surfaces) + 1, -1, np.int64)  # surface -> image of the alpha atlas
+        self._cut_slot = np.full(len(spec.surfaces), -1, np.int64)  # surface -> image of the alpha atlas
         self._cut_slot[cut] = np.arange(len(cut))
         self._cut_alpha = MipTexture.atlas([spec.surfaces[i].texture.levels[0][..., -1:] for i in cut]) \
             if cut else None
@@ -218,13 +218,12 @@ class SetGeometry:
         hits = self.trace(h.p[m] + h.ng[m] * EPS * 5, refl)
         return MirrorHits(cos_v.astype(np.float32), cos_d.astype(np.float32), nh.astype(np.float32), hits)
 
-    def camera_rays(self, a: int = 0, b: int | None = None):
+    def camera_rays(self, a: int, b: int):
         """Unit directions and their x/y neighbour directions (one sample spacing right and down; not normalised,
         which the footprint's plane intersections do not need), each (spp·n, 3) sample-major, for the stratified
-        samples of the pixels a..b (row-major; b None: all)."""
+        samples of the pixels a..b (row-major)."""
         cam = self.spec.camera
         H, W = cam.height, cam.width
-        b = H * W if b is None else b
         offs = stratified_offsets(self.spec.spp)
         step = 1.0 / int(np.ceil(np.sqrt(self.spec.spp)))
         right, up, fwd = cam.basis()

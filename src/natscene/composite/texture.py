@@ -82,6 +82,7 @@ class MipTexture:
         self.widths = np.array([l.shape[1] for l in levels], np.int64)
         self.offsets = np.concatenate([[0], np.cumsum(self.heights * self.widths)[:-1]]).astype(np.int64)
         self.max_level = len(levels) - 1
+        self._jit = None  # the Dr.Jit table, built on first lookup (_table)
 
     @property
     def shape(self) -> tuple:
@@ -95,7 +96,7 @@ class MipTexture:
     def _table(self):
         """The flat table of all levels and the levels' sizes and offsets as Dr.Jit arrays (built on first use,
         in the active Mitsuba variant's backend; an RGB variant is chosen when none is active)."""
-        if getattr(self, "_jit", None) is None:
+        if self._jit is None:
             import mitsuba as mi
             if mi.variant() is None:
                 from natscene.variant import select_variant
