@@ -142,5 +142,6 @@ def budget_study(res, dump, vol, camera, sun, pre, st, scales, budget_s):
         res[f"grid_x{top:g}"] = {"s": s, "noise": noise, "photons": photons}
     dump()
 
+
 if __name__ == "__main__":
     main()
