@@ -11,11 +11,12 @@ from natscene.composite.flower import PetalShape, PetalTexture, flower
 from natscene.composite.full_spectral import render_full_spectral
 from natscene.composite.hybrid import HybridImage, final_rgb
 from natscene.composite.maple import MapleOutline, leaf_mesh, warp_season_map
-from natscene.composite.mesh import merge
+from natscene.composite.mesh import TriMesh, merge
 from natscene.composite.renderer import SetRenderer, spectral_coverage
 from natscene.composite.set_spec import Film, Ground, SetSpec, Shape, Surface, sun_spectrum_from_rgb
 from natscene.composite.sky_dome import SkyDome, gradient_sky, sphere_quadrature
 from natscene.composite.texture import MipTexture
+from natscene.composite.tracer import SetTracer
 from natscene.geometry import Camera, sun_direction
 from natscene.spectral.grid import DEFAULT_GRID, spectrum_to_rgb
 from natscene.spectral.illuminants import d65
@@ -370,6 +371,61 @@ def test_filtered_lookup_of_a_constant_texture_is_the_constant():
     uv = rng.random((500, 2)) * 5
     dx, dy = rng.normal(size=(500, 2)) * 0.2, rng.normal(size=(500, 2)) * 0.01
     np.testing.assert_array_equal(m.filtered(uv, dx, dy, 16), 0.375)
+
+
+def _quad(z: float, half: float, flip: bool) -> TriMesh:
+    """The square |x|, |y| <= ``half`` in the plane z, uv = ((x/half + 1)/2, (y/half + 1)/2)."""
+    pos = np.array([[-half, -half, z], [half, -half, z], [half, half, z], [-half, half, z]])
+    faces = np.array([[0, 2, 1], [0, 3, 2]] if flip else [[0, 1, 2], [0, 2, 3]])
+    uv = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    return TriMesh(pos, faces, uv, np.tile([0.0, 0.0, -1.0 if flip else 1.0], (4, 1)))
+
+
+def test_ray_caster_hits_are_the_analytic_plane_hits():
+    """Closest hits against the plane solution: a square at z = 1 (half-width 1) in front of a larger one at
+    z = 2 (half-width 3, the other winding). A ray o + t·d hits the first at t = (1 − o_z)/d_z where the hit
+    point is inside it, else the second, else nothing; uv is the point's position in the square, ∂p/∂u its
+    edge vector, both normals face the ray origin (rays from behind, z = 5, see +z normals); misses carry
+    label -1, t = inf and zero fields. A shadow query toward +z is blocked exactly where a square is."""
+    tracer = SetTracer([_quad(1.0, 1.0, False), _quad(2.0, 3.0, True)])
+    rng = np.random.default_rng(5)
+    xy = rng.uniform(-2.0, 2.0, (4000, 2))
+    o = np.zeros((4000, 3))
+    o[2000:, 2] = 5.0  # from behind, toward -z
+    d = np.concatenate([xy, np.where(o[:, 2:] > 0, -1.0, 1.0)], -1)
+    d /= np.linalg.norm(d, axis=-1, keepdims=True)
+    h = tracer.intersect(o, d)
+    label = np.full(4000, -1)
+    t = np.full(4000, np.inf)
+    for i, (z, half) in reversed(list(enumerate([(1.0, 1.0), (2.0, 3.0)]))):  # the nearer square wins
+        tt = (z - o[:, 2]) / d[:, 2]
+        p = o + d * tt[:, None]
+        inside = np.all(np.abs(p[:, :2]) < half * (1 - 1e-4), -1)
+        nearer = inside & (tt < t)
+        label[nearer], t[nearer] = i, tt[nearer]
+    edge = np.isfinite(t)
+    for i, (z, half) in enumerate([(1.0, 1.0), (2.0, 3.0)]):  # skip points within 1e-4 of an edge
+        p = o + d * ((z - o[:, 2]) / d[:, 2])[:, None]
+        edge &= ~np.any(np.abs(np.abs(p[:, :2]) - half) < 1e-4 * half, -1)
+    ok = edge | ~np.isfinite(t)
+    np.testing.assert_array_equal(h["label"][ok], label[ok])
+    hit = ok & (label >= 0)
+    np.testing.assert_allclose(h["t"][hit], t[hit], rtol=1e-5)
+    p = o + d * np.where(hit, t, 0)[:, None]
+    half = np.where(label == 0, 1.0, 3.0)[:, None]
+    np.testing.assert_allclose(h["uv"][hit], ((p[:, :2] / half + 1) / 2)[hit], atol=1e-5)
+    np.testing.assert_allclose(h["dp_du"][hit], (np.array([2.0, 0, 0]) * half)[hit], rtol=1e-5)
+    np.testing.assert_allclose(h["dp_dv"][hit], (np.array([0, 2.0, 0]) * half)[hit], rtol=1e-5)
+    facing = np.where(o[:, 2:] > 0, 1.0, -1.0) * np.array([0.0, 0.0, 1.0])
+    for key in ("n", "sn"):
+        np.testing.assert_allclose(h[key][hit], facing[hit], atol=1e-6)
+    miss = ok & (label < 0)
+    assert miss.sum() > 100 and hit.sum() > 1000
+    assert np.all(np.isinf(h["t"][miss])) and not np.any(h["uv"][miss]) and not np.any(h["n"][miss])
+    q = np.c_[rng.uniform(-4.0, 4.0, (2000, 2)), np.zeros(2000)]
+    far = np.all(np.abs(np.abs(q[:, :2]) - 3.0) > 1e-3, -1)
+    blocked = tracer.occluded(q[far], [0.0, 0.0, 1.0])
+    np.testing.assert_array_equal(blocked, np.all(np.abs(q[far, :2]) < 3.0, -1))
 
 
 # ------------------------------------------------------------------------------------------- sky dome
