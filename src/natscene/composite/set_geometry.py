@@ -139,22 +139,16 @@ class SetGeometry:
         lit = np.flatnonzero((kind >= 0) & (nl > 0))
         tr = self.translucency[np.where(kind == KIND_SURFACE, index, -1)]
         behind = np.flatnonzero((kind == KIND_SURFACE) & (nl < 0) & (tr > 0))
-        ground = kind == KIND_GROUND
         for sel, sign, out in ((lit, 1.0, front), (behind, -1.0, back)):
             if sel.size == 0:
                 continue
-            on_ground = ground[sel]
+            side = sign * np.sign(ng[sel] @ l)[:, None]
+            side[side == 0] = sign
+            start = p[sel] + ng[sel] * side * EPS * 5
+            on_ground = kind[sel] == KIND_GROUND
             occ = np.zeros(sel.size, bool)
-            m = sel[~on_ground]
-            if m.size:
-                side = sign * np.sign(ng[m] @ l)[:, None]
-                side[side == 0] = sign
-                occ[~on_ground] = self.tracer.occluded(p[m] + ng[m] * side * EPS * 5, l)
-            gs = sel[on_ground]
-            if gs.size:  # lit ground: its normal is up, toward the sun (above the horizon)
-                start = p[gs]
-                start[:, 1] += EPS * 5
-                occ[on_ground] = self.ground_tracer.occluded(start, l)
+            occ[~on_ground] = self.tracer.occluded(start[~on_ground], l)
+            occ[on_ground] = self.ground_tracer.occluded(start[on_ground], l)
             vis = sel[~occ]
             out[vis] = np.abs(nl[vis])
         return front, back
@@ -171,24 +165,24 @@ class SetGeometry:
         g = self._mesh_hits(o, dirs)
         kind, index = g["kind"], g["index"]
         t = g["t"]
+        p = o + dirs * np.where(np.isfinite(t), t, 0.0)[:, None]
         n = g["sn"].astype(np.float64)
         ng = g["n"].astype(np.float64)
         uv = g["uv"].astype(np.float64)
         dp_du, dp_dv = g["dp_du"].astype(np.float64), g["dp_dv"].astype(np.float64)
         gr = self.spec.ground
-        on = np.zeros(0, np.int64)
         if gr is not None:
             tg = ground_hits(o, dirs)
             on = np.flatnonzero(tg < t)
-            kind[on], index[on], t[on] = KIND_GROUND, 0, tg[on]
-        p = o + dirs * np.where(np.isfinite(t), t, 0.0)[:, None]
-        if on.size:
-            p[on, 1] = 0.0
-            n[on] = ng[on] = [0.0, 1.0, 0.0]
-            ex, ez = gr.extent
-            uv[on] = np.stack([(p[on, 0] - gr.offset[0]) / ex, (p[on, 2] - gr.offset[1]) / ez], -1)
-            dp_du[on] = [ex, 0.0, 0.0]
-            dp_dv[on] = [0.0, 0.0, ez]
+            if on.size:
+                kind[on], index[on], t[on] = KIND_GROUND, 0, tg[on]
+                p[on] = o[on] + dirs[on] * tg[on, None]
+                p[on, 1] = 0.0
+                n[on] = ng[on] = [0.0, 1.0, 0.0]
+                ex, ez = gr.extent
+                uv[on] = np.stack([(p[on, 0] - gr.offset[0]) / ex, (p[on, 2] - gr.offset[1]) / ez], -1)
+                dp_du[on] = [ex, 0.0, 0.0]
+                dp_dv[on] = [0.0, 0.0, ez]
         duv_dx = duv_dy = None
         if ddx is not None:
             duv_dx = np.zeros((M, 2))
@@ -199,13 +193,12 @@ class SetGeometry:
             s = np.flatnonzero(kind == KIND_GROUND)
             if s.size:  # the plane y = 0: the neighbour rays' own ground points, over the texture's extent
                 inv = np.array([1.0 / gr.extent[0], 1.0 / gr.extent[1]])
-                os_, oy, ps = o[s][:, [0, 2]], -o[s, 1], p[s][:, [0, 2]]
                 for nd, out in ((ddx, duv_dx), (ddy, duv_dy)):
                     dd = nd[s]
                     with np.errstate(divide="ignore", invalid="ignore"):
-                        tt = np.where(dd[:, 1] < 0, oy / dd[:, 1], np.inf)
-                    q = os_ + dd[:, [0, 2]] * tt[:, None]
-                    out[s] = np.where(np.isfinite(tt)[:, None], (q - ps) * inv, 1e6)
+                        tt = np.where(dd[:, 1] < 0, -o[s, 1] / dd[:, 1], np.inf)
+                    q = o[s][:, [0, 2]] + dd[:, [0, 2]] * tt[:, None]
+                    out[s] = np.where(np.isfinite(tt)[:, None], (q - p[s][:, [0, 2]]) * inv, 1e6)
         front, back = self._sun(kind, index, p, n, ng)
         self.timing["geometry"] += time.perf_counter() - t0
         return Hits(o, dirs, kind, index, t, p, n, ng, uv, duv_dx, duv_dy, front, back, pixels)

@@ -2,9 +2,9 @@
 analytically.
 
 The meshes go into one Mitsuba scene (RGB variant; meshes built in memory with ``mi.Mesh`` and
-``mi.traverse``). A query finds the closest hits of all rays (``ray_intersect_preliminary``: shape, primitive,
-distance), then computes the surface fields (geometric and shading normals, uv, ∂p/∂u, ∂p/∂v) for the hits only
-(``compute_surface_interaction``), one fused Dr.Jit kernel each: most camera rays see the sky or the ground.
+``mi.traverse``); a query is one fused Dr.Jit kernel whose fields (shape, validity, distance, geometric and
+shading normals, uv, ∂p/∂u, ∂p/∂v) are evaluated together; only the hits' fields are copied to numpy (most
+camera rays see the sky or the ground).
 The ground is not a mesh: a plane to the horizon in float32 would lose the centimetres of the near field at
 kilometres of extent, so its hit is t = −o_y / d_y in float64 (d_y < 0) and its texture coordinates are
 (x, z) divided by the texture's extent in metres.
@@ -64,37 +64,26 @@ class SetTracer:
         if M == 0 or self.n_shapes == 0 or self._label_of_id.size == 1 and self._label_of_id[0] < 0:
             return _empty_hits(M)
         mi, dr = self.mi, self.dr
-        ray = self._rays(origins, dirs)
-        pi = self.scene.ray_intersect_preliminary(ray)
-        sid = dr.reinterpret_array(mi.UInt32, pi.shape)
-        valid = pi.is_valid()
-        dr.eval(valid, sid, pi.t, pi.prim_uv, pi.prim_index, pi.shape_index)
-        hit = dr.compress(valid)  # most rays miss the meshes (sky, ground): the surface fields of the hits only
+        si = self.scene.ray_intersect(self._rays(origins, dirs))
+        sid = dr.reinterpret_array(mi.UInt32, si.shape)
+        valid = si.is_valid()
+        fields = {"t": si.t, "n": si.n, "sn": si.sh_frame.n, "uv": si.uv, "dp_du": si.dp_du, "dp_dv": si.dp_dv}
+        dr.eval(sid, valid, *fields.values())
+        hit = dr.compress(valid)  # most rays miss the meshes (sky, ground): copy out the hits only
         out = _empty_hits(M)
-        H = dr.width(hit)
-        if H == 0:
+        if dr.width(hit) == 0:
             return out
-        hp = dr.zeros(mi.PreliminaryIntersection3f, H)
-        hp.valid = dr.full(mi.Bool, True, H)
-        hp.t = dr.gather(mi.Float, pi.t, hit)
-        hp.prim_uv = dr.gather(mi.Point2f, pi.prim_uv, hit)
-        hp.prim_index = dr.gather(mi.UInt32, pi.prim_index, hit)
-        hp.shape_index = dr.gather(mi.UInt32, pi.shape_index, hit)
-        hit_sid = dr.gather(mi.UInt32, sid, hit)
-        hp.shape = dr.reinterpret_array(mi.ShapePtr, hit_sid)
-        si = hp.compute_surface_interaction(dr.gather(mi.Ray3f, ray, hit), mi.RayFlags.All)
-        fields = {"n": si.n, "sn": si.sh_frame.n, "uv": si.uv, "dp_du": si.dp_du, "dp_dv": si.dp_dv}
-        dr.eval(hit_sid, hp.t, *fields.values())
         hi = np.asarray(hit, np.int64)
-        idx = np.minimum(np.asarray(hit_sid, np.int64), self._label_of_id.size - 1)
+        idx = np.minimum(np.asarray(dr.gather(mi.UInt32, sid, hit), np.int64), self._label_of_id.size - 1)
         out["label"][hi] = self._label_of_id[idx]
-        out["t"][hi] = np.asarray(hp.t, np.float64)
-        d = np.asarray(dirs)[hi].astype(np.float32)
-        for key, val in fields.items():
-            v = np.asarray(val, np.float32).T
-            if key in ("n", "sn"):  # facing the ray origin
-                v[np.einsum("ij,ij->i", v, d) > 0] *= -1
-            out[key][hi] = v
+        out["t"][hi] = np.asarray(dr.gather(mi.Float, si.t, hit), np.float64)
+        for key in ("n", "sn", "uv", "dp_du", "dp_dv"):
+            val = fields[key]
+            out[key][hi] = np.asarray(dr.gather(type(val), val, hit), np.float32).T
+        d = np.asarray(dirs, np.float32)[hi]
+        for key in ("n", "sn"):
+            flip = hi[np.einsum("ij,ij->i", out[key][hi], d) > 0]
+            out[key][flip] *= -1
         return out
 
     def occluded(self, origins: np.ndarray, direction: np.ndarray) -> np.ndarray:
