@@ -428,6 +428,29 @@ def test_ray_caster_hits_are_the_analytic_plane_hits():
     np.testing.assert_array_equal(blocked, np.all(np.abs(q[far, :2]) < 3.0, -1))
 
 
+def test_texture_derivatives_on_a_plane_are_the_neighbour_rays_offsets():
+    """On the plane z = 1 with ∂p/∂u = (2, 0, 0), ∂p/∂v = (0, 3, 0), the footprint of a ray from the origin
+    toward d is the offset between the plane points of d and of its neighbour d', (p' − p) = d'/d'_z − d/d_z,
+    divided by the tangents' lengths; a neighbour parallel to the plane gives zero."""
+    from natscene.variant import select_variant
+    select_variant(spectral=False)
+    import mitsuba as mi
+
+    from natscene.composite.footprint import texture_derivative
+    rng = np.random.default_rng(6)
+    d = np.c_[rng.uniform(-0.5, 0.5, (200, 2)), np.ones(200)]
+    nd = d + np.c_[rng.normal(0, 0.01, (200, 2)), rng.normal(0, 0.01, 200)]
+    nd[0] = [1.0, 0.0, 0.0]
+    v3 = lambda a: mi.Array3f64(*(mi.Float64(np.ascontiguousarray(a[:, k])) for k in range(3)))
+    p = d / d[:, 2:]
+    z = np.zeros((200, 3))
+    f = texture_derivative(v3(z), v3(p), v3(z + [0, 0, -1.0]), v3(nd), v3(z + [2.0, 0, 0]), v3(z + [0, 3.0, 0]))
+    got = np.asarray(f).T
+    want = (nd[1:] / nd[1:, 2:] - p[1:])[:, :2] / [2.0, 3.0]
+    np.testing.assert_allclose(got[1:], want, rtol=1e-9, atol=1e-12)
+    np.testing.assert_array_equal(got[0], [0.0, 0.0])
+
+
 # ------------------------------------------------------------------------------------------- sky dome
 def test_sky_dome_irradiance():
     """SH9 irradiance (Ramamoorthi & Hanrahan 2001): exact for a constant sky (E = π L for every normal); for a

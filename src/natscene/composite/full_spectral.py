@@ -110,7 +110,7 @@ def render_full_spectral(renderer: SetRenderer) -> tuple[np.ndarray, np.ndarray]
     for sl, dirs, ddx, ddy in r.blocks(block_rays=max(spp, (1 << 24) // (4 * N))):  # (rays x N) float32 <= 16 MB
         h = r.trace(origin, dirs, ddx, ddy, pixels=sl.stop - sl.start)
         n = sl.stop - sl.start
-        out = np.zeros((dirs.shape[0], N), np.float32)
+        out = np.zeros((h.kind.size, N), np.float32)
         bg = h.kind == KIND_SKY
         out[bg] = np.tile(inp.plate[sl], (spp, 1))[bg]
         rm = np.flatnonzero((h.kind == KIND_GROUND) | (h.kind == KIND_SURFACE))

@@ -255,7 +255,7 @@ class SetRenderer(SetGeometry):
         for sl, dirs, ddx, ddy in self.blocks():
             h = self.trace(origin, dirs, ddx, ddy, pixels=sl.stop - sl.start)
             n = sl.stop - sl.start
-            out = np.zeros((dirs.shape[0], 3), np.float32)
+            out = np.zeros((h.kind.size, 3), np.float32)
             bg = h.kind == KIND_SKY
             out[bg] = np.tile(plate[sl], (spp, 1))[bg]
             rm = np.flatnonzero((h.kind == KIND_GROUND) | (h.kind == KIND_SURFACE))

@@ -8,6 +8,10 @@ Camera rays through fixed stratified sub-pixel positions, each with two neighbou
 shadow rays (front and, through translucent sheets, back); for film samples, the mirror ray and what it hits.
 The set's sun (its direction, its spectrum and that spectrum's RGB value, Dong §2.3.3) is held here too: the
 shadow rays need it, every shading mode uses it.
+
+A block of rays runs as Dr.Jit kernels from the camera rays to the sun terms (float64 for directions, hit
+points and footprints, float32 for the Mitsuba queries, in the order of the formulas without fused
+multiply-adds); its results are copied to numpy once, for the shading.
 """
 from __future__ import annotations
 
@@ -16,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from natscene.composite.footprint import texture_derivatives
+from natscene.composite.footprint import texture_derivative
 from natscene.composite.set_spec import SetSpec
 from natscene.composite.texture import MipTexture
 from natscene.composite.tracer import SetTracer, ground_hits
@@ -89,119 +93,130 @@ class SetGeometry:
         self._cut_slot[cut] = np.arange(len(cut))
         self._cut_alpha = MipTexture.atlas([spec.surfaces[i].texture.levels[0][..., -1:] for i in cut]) \
             if cut else None
+        # per shape label (the last entry: no shape): the cut-out atlas image of its surface, or -1
+        cut_of = [self._cut_slot[s.surface] if s.film is None else -1 for s in spec.shapes] + [-1]
+        mi, dr = self.tracer.mi, self.tracer.dr
+        self.mi, self.dr = mi, dr
+        self._tabs = {"kind": mi.Int32(self.kind_of.astype(np.int32)),
+                      "index": mi.Int32(self.index_of.astype(np.int32)),
+                      "cut": mi.Int32(np.asarray(cut_of, np.int32)), "tr": mi.Float(self.translucency)}
         self.timing = {"geometry": 0.0, "shading": 0.0}
 
-    def _classify(self, label):
-        lab = np.where(label >= 0, label, len(self.spec.shapes))
-        return self.kind_of[lab], self.index_of[lab]
+    def _vec(self, a):
+        """A (3,) vector or (M, 3) array as a Dr.Jit Array3f64."""
+        a = np.asarray(a, np.float64)
+        if a.ndim == 1:
+            return self.mi.Array3f64(*(float(x) for x in a))
+        return self.mi.Array3f64(*(self.mi.Float64(np.ascontiguousarray(a[:, k])) for k in range(3)))
 
-    def _cut(self, index: np.ndarray, uv: np.ndarray) -> np.ndarray:
-        """Whether surface samples fall in a transparent part (alpha < 0.5) of their cut-out texture (one
-        lookup in the atlas of the cut-out textures' alpha channels)."""
-        drop = np.zeros(index.size, bool)
-        slot = self._cut_slot[index]
-        m = np.flatnonzero(slot >= 0)
-        if m.size:
-            drop[m] = self._cut_alpha.bilinear(uv[m], slot[m])[:, 0] < 0.5
-        return drop
+    def _lookup_label(self, table: str, label):
+        """Per-ray entry of a per-shape table (kind, index, cut-out image) for Dr.Jit labels (-1: none)."""
+        tab = self._tabs[table]
+        return self.dr.gather(type(tab), tab, self.dr.select(label >= 0, label, len(self.spec.shapes)))
 
-    def _mesh_hits(self, origins: np.ndarray, dirs: np.ndarray) -> dict:
-        """Closest mesh hits skipping the cut-outs (the ray goes on through transparent texels)."""
-        o = np.broadcast_to(origins, dirs.shape).astype(np.float64)
-        g = self.tracer.intersect(o, dirs)
-        kind, index = self._classify(g["label"])
-        g["t"] = np.asarray(g["t"], np.float64)
-        for _ in range(16):
-            sm = np.flatnonzero(kind == KIND_SURFACE)
-            if sm.size == 0:
+    def _mesh_hits(self, o, d) -> dict:
+        """Closest mesh hits of Dr.Jit rays skipping the cut-outs: a sample on a cut-out surface whose atlas
+        alpha is below 0.5 goes on from EPS past its hit (at most 16 times), evaluated."""
+        mi, dr = self.mi, self.dr
+        g = self.tracer.intersect_dr(o, d)
+        dr.eval(*g.values())
+        for _ in range(16 if self._cut_alpha is not None else 0):
+            slot = self._lookup_label("cut", g["label"])
+            need = slot >= 0
+            sl = mi.UInt32(dr.select(need, slot, 0))
+            u, v = mi.Float64(g["uv"].x), mi.Float64(g["uv"].y)
+            alpha = self._cut_alpha.lookup_dr(u, v, sl, sl, mi.Float(0.0))[0]
+            redo = need & (alpha < 0.5)
+            dr.eval(redo)
+            if not dr.any(redo):
                 break
-            ids = sm[self._cut(index[sm], g["uv"][sm])]
-            if ids.size == 0:
-                break
-            start = o[ids] + dirs[ids] * (g["t"][ids] + EPS)[:, None]
-            g2 = self.tracer.intersect(start, dirs[ids])
-            g2["t"] = g["t"][ids] + EPS + g2["t"]
-            for key in g:
-                g[key][ids] = g2[key]
-            kind[ids], index[ids] = self._classify(g2["label"])
-        g["kind"], g["index"] = kind, index
+            g2 = self.tracer.intersect_dr(o + d * (g["t"] + EPS), d, redo)
+            g2["t"] = g["t"] + EPS + g2["t"]
+            g = {key: dr.select(redo, g2[key], g[key]) for key in g}
+            dr.eval(*g.values())
         return g
 
     def _sun(self, kind, index, p, n, ng):
-        """(front, back) sun terms: max(±n.l, 0) times the shadow-ray visibility (back only for translucent
-        surfaces)."""
-        M = kind.shape[0]
-        front, back = np.zeros(M, np.float32), np.zeros(M, np.float32)
+        """(front, back) sun terms (Dr.Jit Float64): max(±n.l, 0) times the shadow-ray visibility (back only for
+        translucent surfaces)."""
+        mi, dr = self.mi, self.dr
+        M = dr.width(kind)
         if not np.any(self.sun_rgb > 0):
-            return front, back
-        l = self.sun_dir
-        nl = n @ l
-        lit = np.flatnonzero((kind >= 0) & (nl > 0))
-        tr = self.translucency[np.where(kind == KIND_SURFACE, index, -1)]
-        behind = np.flatnonzero((kind == KIND_SURFACE) & (nl < 0) & (tr > 0))
-        for sel, sign, out in ((lit, 1.0, front), (behind, -1.0, back)):
-            if sel.size == 0:
-                continue
-            side = sign * np.sign(ng[sel] @ l)[:, None]
-            side[side == 0] = sign
-            start = p[sel] + ng[sel] * side * EPS * 5
-            on_ground = kind[sel] == KIND_GROUND
-            occ = np.zeros(sel.size, bool)
-            occ[~on_ground] = self.tracer.occluded(start[~on_ground], l)
-            occ[on_ground] = self.ground_tracer.occluded(start[on_ground], l)
-            vis = sel[~occ]
-            out[vis] = np.abs(nl[vis])
-        return front, back
+            return dr.zeros(mi.Float64, M), dr.zeros(mi.Float64, M)
+        l = self._vec(self.sun_dir)
+        lf = mi.Vector3f(l)
+        nl = n.x * l.x + n.y * l.y + n.z * l.z
+        surf = kind == KIND_SURFACE
+        tr = dr.gather(mi.Float, self._tabs["tr"], dr.select(surf, index, len(self.spec.surfaces)))
+        lit = (kind >= 0) & (nl > 0)
+        behind = surf & (nl < 0) & (tr > 0)
+        on_ground = kind == KIND_GROUND
+        ngl = ng.x * l.x + ng.y * l.y + ng.z * l.z
+        out = []
+        for sel, sign in ((lit, 1.0), (behind, -1.0)):
+            side = dr.select(ngl < 0, -sign, sign)
+            start = p + ng * side * EPS * 5
+            occ = self.tracer.occluded_dr(start, lf, sel & ~on_ground) | \
+                self.ground_tracer.occluded_dr(start, lf, sel & on_ground)
+            out.append(dr.select(sel & ~occ, dr.abs(nl), 0.0))
+        return out[0], out[1]
 
-    def trace(self, origin, dirs: np.ndarray, ddx: np.ndarray | None = None, ddy: np.ndarray | None = None,
-              pixels: int = 0) -> Hits:
-        """Closest hits of rays from ``origin`` ((3,) or (M, 3)) along unit ``dirs`` (M, 3): meshes and ground,
-        texture footprints from the neighbour directions ``ddx``, ``ddy`` (None: no footprint), sun terms.
+    def trace(self, origin, dirs, ddx=None, ddy=None, pixels: int = 0) -> Hits:
+        """Closest hits of rays from ``origin`` ((3,) or (M, 3)) along unit ``dirs`` (M, 3; numpy or Dr.Jit
+        Array3f64): meshes and ground, texture footprints from the neighbour directions ``ddx``, ``ddy``
+        (None: no footprint), sun terms; one Dr.Jit pipeline, the results copied to numpy once.
         ``pixels``: for a block of camera rays (sample-major), its number of pixels."""
         t0 = time.perf_counter()
-        dirs = np.asarray(dirs, np.float64)
-        M = dirs.shape[0]
-        o = np.broadcast_to(np.asarray(origin, np.float64), (M, 3))
-        g = self._mesh_hits(o, dirs)
-        kind, index = g["kind"], g["index"]
+        mi, dr = self.mi, self.dr
+        d = dirs if isinstance(dirs, mi.Array3f64) else self._vec(dirs)
+        M = dr.width(d)
+        org = np.asarray(origin, np.float64)
+        if M == 0:
+            z = np.zeros((0, 3))
+            return Hits(z, z, np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0), z, z, z, np.zeros((0, 2)),
+                        None, None, np.zeros(0, np.float32), np.zeros(0, np.float32), pixels)
+        o = self._vec(org)
+        g = self._mesh_hits(o, d)
+        kind, index = self._lookup_label("kind", g["label"]), self._lookup_label("index", g["label"])
         t = g["t"]
-        p = o + dirs * np.where(np.isfinite(t), t, 0.0)[:, None]
-        n = g["sn"].astype(np.float64)
-        ng = g["n"].astype(np.float64)
-        uv = g["uv"].astype(np.float64)
-        dp_du, dp_dv = g["dp_du"].astype(np.float64), g["dp_dv"].astype(np.float64)
+        n, ng = mi.Array3f64(g["sn"]), mi.Array3f64(g["n"])
+        uv = mi.Array2f64(g["uv"])
+        dp_du, dp_dv = mi.Array3f64(g["dp_du"]), mi.Array3f64(g["dp_dv"])
         gr = self.spec.ground
+        on = dr.full(mi.Bool, False, M)
+        if gr is not None:  # the plane y = 0 (tracer.ground_hits)
+            tg = ground_hits(o, d)
+            on = tg < t
+            kind, index, t = dr.select(on, KIND_GROUND, kind), dr.select(on, 0, index), dr.select(on, tg, t)
+        p = o + d * dr.select(dr.isfinite(t), t, 0.0)
         if gr is not None:
-            tg = ground_hits(o, dirs)
-            on = np.flatnonzero(tg < t)
-            if on.size:
-                kind[on], index[on], t[on] = KIND_GROUND, 0, tg[on]
-                p[on] = o[on] + dirs[on] * tg[on, None]
-                p[on, 1] = 0.0
-                n[on] = ng[on] = [0.0, 1.0, 0.0]
-                ex, ez = gr.extent
-                uv[on] = np.stack([(p[on, 0] - gr.offset[0]) / ex, (p[on, 2] - gr.offset[1]) / ez], -1)
-                dp_du[on] = [ex, 0.0, 0.0]
-                dp_dv[on] = [0.0, 0.0, ez]
-        duv_dx = duv_dy = None
+            ex, ez = (float(e) for e in gr.extent)
+            p = mi.Array3f64(p.x, dr.select(on, 0.0, p.y), p.z)
+            up = mi.Array3f64(0.0, 1.0, 0.0)
+            n, ng = dr.select(on, up, n), dr.select(on, up, ng)
+            uv = dr.select(on, mi.Array2f64((p.x - gr.offset[0]) / ex, (p.z - gr.offset[1]) / ez), uv)
+            dp_du = dr.select(on, mi.Array3f64(ex, 0.0, 0.0), dp_du)
+            dp_dv = dr.select(on, mi.Array3f64(0.0, 0.0, ez), dp_dv)
+        fp = []
         if ddx is not None:
-            duv_dx = np.zeros((M, 2))
-            duv_dy = np.zeros((M, 2))
-            s = np.flatnonzero(kind > KIND_GROUND)
-            if s.size:
-                duv_dx[s], duv_dy[s] = texture_derivatives(o[s], p[s], ng[s], ddx[s], ddy[s], dp_du[s], dp_dv[s])
-            s = np.flatnonzero(kind == KIND_GROUND)
-            if s.size:  # the plane y = 0: the neighbour rays' own ground points, over the texture's extent
-                inv = np.array([1.0 / gr.extent[0], 1.0 / gr.extent[1]])
-                for nd, out in ((ddx, duv_dx), (ddy, duv_dy)):
-                    dd = nd[s]
-                    with np.errstate(divide="ignore", invalid="ignore"):
-                        tt = np.where(dd[:, 1] < 0, -o[s, 1] / dd[:, 1], np.inf)
-                    q = o[s][:, [0, 2]] + dd[:, [0, 2]] * tt[:, None]
-                    out[s] = np.where(np.isfinite(tt)[:, None], (q - p[s][:, [0, 2]]) * inv, 1e6)
+            mesh = kind > KIND_GROUND
+            for nd in (ddx, ddy):
+                nd = nd if isinstance(nd, mi.Array3f64) else self._vec(nd)
+                f = dr.select(mesh, texture_derivative(o, p, ng, nd, dp_du, dp_dv), 0.0)
+                if gr is not None:  # the plane y = 0: the neighbour ray's own ground point, over the extent
+                    tt = dr.select(nd.y < 0, -o.y / nd.y, dr.inf)
+                    q = mi.Array2f64((o.x + nd.x * tt - p.x) * (1.0 / ex), (o.z + nd.z * tt - p.z) * (1.0 / ez))
+                    f = dr.select(on, dr.select(dr.isfinite(tt), q, 1e6), f)
+                fp.append(f)
         front, back = self._sun(kind, index, p, n, ng)
+        vecs = {"p": p, "n": n, "ng": ng, "uv": uv, "dirs": d}
+        dr.eval(kind, index, t, front, back, *vecs.values(), *fp)
+        rows = {key: np.ascontiguousarray(np.asarray(v).T) for key, v in vecs.items()}  # (M, 3) / (M, 2) float64
+        duv = [np.ascontiguousarray(np.asarray(f).T) for f in fp] or [None, None]
         self.timing["geometry"] += time.perf_counter() - t0
-        return Hits(o, dirs, kind, index, t, p, n, ng, uv, duv_dx, duv_dy, front, back, pixels)
+        return Hits(np.broadcast_to(org, (M, 3)), rows["dirs"], np.asarray(kind, np.int64), np.asarray(index, np.int64),
+                    np.asarray(t, np.float64), rows["p"], rows["n"], rows["ng"], rows["uv"], duv[0], duv[1],
+                    np.asarray(front, np.float32), np.asarray(back, np.float32), pixels)
 
     def mirror(self, h: Hits, m: np.ndarray) -> MirrorHits:
         """View/sun geometry of the film samples ``m`` and the hits of their mirror rays."""
@@ -220,30 +235,28 @@ class SetGeometry:
 
     def camera_rays(self, a: int, b: int):
         """Unit directions and their x/y neighbour directions (one sample spacing right and down; not normalised,
-        which the footprint's plane intersections do not need), each (spp·n, 3) sample-major, for the stratified
-        samples of the pixels a..b (row-major)."""
+        which the footprint's plane intersections do not need), each a Dr.Jit Array3f64 of spp·n rays
+        sample-major, for the stratified samples of the pixels a..b (row-major)."""
+        mi, dr = self.mi, self.dr
         cam = self.spec.camera
         H, W = cam.height, cam.width
         offs = stratified_offsets(self.spec.spp)
         step = 1.0 / int(np.ceil(np.sqrt(self.spec.spp)))
-        right, up, fwd = cam.basis()
-        th = np.tan(np.radians(cam.fov) / 2)
+        right, up, fwd = (self._vec(v) for v in cam.basis())
+        th = float(np.tan(np.radians(cam.fov) / 2))
         ex = right * (2 * th * (W / H) / W * step)
         ey = -up * (2 * th / H * step)
         n = b - a
-        d, dx, dy = (np.empty((offs.shape[0] * n, 3)) for _ in range(3))
-        row, col = np.divmod(np.arange(a, b), W)
-        col, row = col.astype(np.float64), row.astype(np.float64)
-        for s, off in enumerate(offs):
-            x = ((2 * (col + 0.5 + off[0]) / W - 1) * th * (W / H))[:, None]
-            y = ((1 - 2 * (row + 0.5 + off[1]) / H) * th)[:, None]
-            D = x * right + y * up + fwd
-            L = np.linalg.norm(D, axis=-1, keepdims=True)
-            k = slice(s * n, (s + 1) * n)
-            np.divide(D, L, out=d[k])
-            np.divide(D + ex, L, out=dx[k])
-            np.divide(D + ey, L, out=dy[k])
-        return d, dx, dy
+        i = dr.arange(mi.UInt32, offs.shape[0] * n)
+        s, pix = i // n, a + i % n
+        row, col = mi.Float64(pix // W), mi.Float64(pix % W)
+        ox = dr.gather(mi.Float64, mi.Float64(offs[:, 0]), s)
+        oy = dr.gather(mi.Float64, mi.Float64(offs[:, 1]), s)
+        x = (2 * (col + 0.5 + ox) / W - 1) * th * (W / H)
+        y = (1 - 2 * (row + 0.5 + oy) / H) * th
+        D = right * x + up * y + fwd
+        L = dr.sqrt(D.x * D.x + D.y * D.y + D.z * D.z)
+        return D / L, (D + ex) / L, (D + ey) / L
 
     def blocks(self, block_rays: int = 1 << 17):
         """Yield (pixel slice, dirs, ddx, ddy), the directions (spp·n, 3) sample-major, over blocks of pixels."""

@@ -109,8 +109,25 @@ class MipTexture:
 
     def _lookup(self, uv: np.ndarray, l0: np.ndarray, l1: np.ndarray, t: np.ndarray, step: np.ndarray | None = None,
                 k: np.ndarray | None = None) -> np.ndarray:
+        """:meth:`lookup_dr` of numpy inputs, (M, C) float32."""
+        import drjit as dr
+        mi = self._table()[0]
+        u0, v0 = mi.Float64(np.ascontiguousarray(uv[:, 0])), mi.Float64(np.ascontiguousarray(uv[:, 1]))
+        tt = mi.Float(np.ascontiguousarray(t, np.float32))
+        lev = [mi.UInt32(np.ascontiguousarray(l, np.uint32)) for l in (l0, l1)]
+        if step is None:
+            res = self.lookup_dr(u0, v0, lev[0], lev[1], tt)
+        else:
+            res = self.lookup_dr(u0, v0, lev[0], lev[1], tt, mi.Float64(np.ascontiguousarray(step[:, 0])),
+                                 mi.Float64(np.ascontiguousarray(step[:, 1])),
+                                 mi.Int32(np.ascontiguousarray(k, np.int32)))
+        dr.eval(*res)
+        return np.stack([np.asarray(r, np.float32) for r in res], -1)
+
+    def lookup_dr(self, u0, v0, l0, l1, tt, su=None, sv=None, kk=None) -> list:
         """The mean over probes j < k of (1 − t)·bilinear(level l0) + t·bilinear(level l1) at
-        uv + ((j + ½)/k − ½)·step (``step`` None, ``k`` None: the one probe at uv), (M, C) float32.
+        uv + ((j + ½)/k − ½)·step (``su``, ``sv``, ``kk`` None: the one probe at uv), one Dr.Jit Float per
+        channel (unevaluated; u0, v0, su, sv Float64, l0, l1 UInt32, tt Float, kk Int32).
 
         One fused Dr.Jit kernel with a per-sample loop over its probes (four texel gathers per level and
         channel). The probe positions and the wrap are float64, the filtering float32, each in the order of
@@ -119,16 +136,10 @@ class MipTexture:
         import drjit as dr
         mi, flat, W, H, O = self._table()
         C, wrap = self.channels, self.wrap
-        u0, v0 = mi.Float64(np.ascontiguousarray(uv[:, 0])), mi.Float64(np.ascontiguousarray(uv[:, 1]))
-        tt = mi.Float(np.ascontiguousarray(t, np.float32))
-        lev = [mi.UInt32(np.ascontiguousarray(l, np.uint32)) for l in (l0, l1)]
-        sizes = [tuple(dr.gather(mi.UInt32, a, l) for a in (W, H, O)) for l in lev]
-        if step is None:
+        sizes = [tuple(dr.gather(mi.UInt32, a, l) for a in (W, H, O)) for l in (l0, l1)]
+        if su is None:
             su = sv = mi.Float64(0.0)
             kk = mi.Int32(1)
-        else:
-            su, sv = mi.Float64(np.ascontiguousarray(step[:, 0])), mi.Float64(np.ascontiguousarray(step[:, 1]))
-            kk = mi.Int32(np.ascontiguousarray(k, np.int32))
 
         def bilinear(u, v, size):
             w, h, off = size
@@ -173,9 +184,7 @@ class MipTexture:
 
         zero = dr.zeros(mi.Float, dr.width(u0))
         _, acc = dr.while_loop((mi.Int32(0), [zero] * C), lambda j, acc: j < kk, body)
-        res = [a_ / mi.Float(kk) for a_ in acc]
-        dr.eval(*res)
-        return np.stack([np.asarray(r, np.float32) for r in res], -1)
+        return [a_ / mi.Float(kk) for a_ in acc]
 
     def bilinear(self, uv: np.ndarray, level=0) -> np.ndarray:
         """Unfiltered (point) lookup of one level (an int, or one per sample): bilinear interpolation of its

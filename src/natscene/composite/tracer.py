@@ -2,9 +2,10 @@
 analytically.
 
 The meshes go into one Mitsuba scene (RGB variant; meshes built in memory with ``mi.Mesh`` and
-``mi.traverse``); a query is one fused Dr.Jit kernel whose fields (shape, validity, distance, geometric and
-shading normals, uv, ∂p/∂u, ∂p/∂v) are evaluated together; only the hits' fields are copied to numpy (most
-camera rays see the sky or the ground).
+``mi.traverse``). The queries take and return Dr.Jit arrays (:meth:`SetTracer.intersect_dr`: shape label,
+distance, geometric and shading normals facing the ray origin, uv, ∂p/∂u, ∂p/∂v; :meth:`SetTracer.occluded_dr`),
+so that the renderer's geometry runs as one Dr.Jit pipeline; :meth:`SetTracer.intersect` and
+:meth:`SetTracer.occluded` are the same queries on numpy arrays.
 The ground is not a mesh: a plane to the horizon in float32 would lose the centimetres of the near field at
 kilometres of extent, so its hit is t = −o_y / d_y in float64 (d_y < 0) and its texture coordinates are
 (x, z) divided by the texture's extent in metres.
@@ -37,6 +38,7 @@ class SetTracer:
         self._label_of_id = np.full((max(ids) + 1) if ids else 1, -1, np.int64)
         if ids:
             self._label_of_id[ids] = [int(s.id()[1:]) for s in sh]
+        self._label_table = None  # the Dr.Jit copy, made on first query
 
     def _mesh(self, name: str, m: TriMesh):
         mi = self.mi
@@ -52,47 +54,67 @@ class SetTracer:
 
     def _rays(self, origins: np.ndarray, dirs: np.ndarray):
         mi = self.mi
-        o = np.ascontiguousarray(np.broadcast_to(np.asarray(origins, np.float32), np.shape(dirs)).T)
-        v = np.ascontiguousarray(np.asarray(dirs, np.float32).T)
-        return mi.Ray3f(mi.Point3f(o[0], o[1], o[2]), mi.Vector3f(v[0], v[1], v[2]))
+        o = np.ascontiguousarray(np.broadcast_to(np.asarray(origins, np.float64), np.shape(dirs)).T)
+        v = np.ascontiguousarray(np.asarray(dirs, np.float64).T)
+        return mi.Array3f64(o[0], o[1], o[2]), mi.Array3f64(v[0], v[1], v[2])
+
+    def _empty(self):
+        return self.n_shapes == 0 or self._label_of_id.size == 1 and self._label_of_id[0] < 0
+
+    def intersect_dr(self, o, d, active=True) -> dict:
+        """Closest mesh hits of Dr.Jit rays (origins ``o``, directions ``d``: Array3f64, cast to float32 for the
+        query; ``active``: which rays to trace), unevaluated: ``label`` (Int32, shape index, -1: none), ``t``
+        (Float64, inf: none), ``n`` (geometric normal), ``sn`` (shading normal), both facing the ray origin,
+        ``uv``, ``dp_du``, ``dp_dv`` (float32, zero for misses)."""
+        mi, dr = self.mi, self.dr
+        M = dr.width(d)
+        if self._empty():
+            z3 = dr.zeros(mi.Vector3f, M)
+            return {"label": dr.full(mi.Int32, -1, M), "t": dr.full(mi.Float64, dr.inf, M), "n": z3, "sn": z3,
+                    "uv": dr.zeros(mi.Point2f, M), "dp_du": z3, "dp_dv": z3}
+        if self._label_table is None:
+            self._label_table = mi.Int32(self._label_of_id.astype(np.int32))
+        si = self.scene.ray_intersect(mi.Ray3f(mi.Point3f(o), mi.Vector3f(d)), active)
+        valid = si.is_valid()
+        sid = dr.minimum(dr.reinterpret_array(mi.UInt32, si.shape), self._label_of_id.size - 1)
+        out = {"label": dr.select(valid, dr.gather(mi.Int32, self._label_table, sid, valid), -1),
+               "t": dr.select(valid, mi.Float64(si.t), dr.inf)}
+        d32 = mi.Vector3f(d)
+        for key, v in (("n", si.n), ("sn", si.sh_frame.n)):
+            v = dr.select(v.x * d32.x + v.y * d32.y + v.z * d32.z > 0, -v, v)
+            out[key] = dr.select(valid, v, 0.0)
+        out["uv"] = dr.select(valid, si.uv, 0.0)
+        out["dp_du"] = dr.select(valid, si.dp_du, 0.0)
+        out["dp_dv"] = dr.select(valid, si.dp_dv, 0.0)
+        return out
 
     def intersect(self, origins: np.ndarray, dirs: np.ndarray) -> dict:
-        """Closest mesh hits of rays (M, 3): ``label`` (M,) shape index or -1, ``t`` (inf: none), ``n``
-        (geometric normal), ``sn`` (shading normal), both facing the ray origin, ``uv``, ``dp_du``, ``dp_dv``
-        (zero for misses)."""
+        """:meth:`intersect_dr` of rays (M, 3) as numpy arrays: ``label`` (M,) int64, ``t`` float64, the other
+        fields (M, 3) / (M, 2) float32."""
         M = np.shape(dirs)[0]
-        if M == 0 or self.n_shapes == 0 or self._label_of_id.size == 1 and self._label_of_id[0] < 0:
+        if M == 0 or self._empty():
             return _empty_hits(M)
-        mi, dr = self.mi, self.dr
-        si = self.scene.ray_intersect(self._rays(origins, dirs))
-        sid = dr.reinterpret_array(mi.UInt32, si.shape)
-        valid = si.is_valid()
-        fields = {"t": si.t, "n": si.n, "sn": si.sh_frame.n, "uv": si.uv, "dp_du": si.dp_du, "dp_dv": si.dp_dv}
-        dr.eval(sid, valid, *fields.values())
-        hit = dr.compress(valid)  # most rays miss the meshes (sky, ground): copy out the hits only
-        out = _empty_hits(M)
-        if dr.width(hit) == 0:
-            return out
-        hi = np.asarray(hit, np.int64)
-        idx = np.minimum(np.asarray(dr.gather(mi.UInt32, sid, hit), np.int64), self._label_of_id.size - 1)
-        out["label"][hi] = self._label_of_id[idx]
-        out["t"][hi] = np.asarray(dr.gather(mi.Float, si.t, hit), np.float64)
+        h = self.intersect_dr(*self._rays(origins, dirs))
+        self.dr.eval(*h.values())
+        out = {"label": np.asarray(h["label"], np.int64), "t": np.asarray(h["t"], np.float64)}
         for key in ("n", "sn", "uv", "dp_du", "dp_dv"):
-            val = fields[key]
-            out[key][hi] = np.asarray(dr.gather(type(val), val, hit), np.float32).T
-        d = np.asarray(dirs, np.float32)[hi]
-        for key in ("n", "sn"):
-            flip = hi[np.einsum("ij,ij->i", out[key][hi], d) > 0]
-            out[key][flip] *= -1
+            out[key] = np.ascontiguousarray(np.asarray(h[key], np.float32).T)
         return out
+
+    def occluded_dr(self, o, direction, active=True):
+        """Whether Dr.Jit rays from ``o`` (Array3f64) toward ``direction`` hit any mesh (Bool, unevaluated)."""
+        mi, dr = self.mi, self.dr
+        if self._empty():
+            return dr.full(mi.Bool, False, dr.width(o))
+        return self.scene.ray_test(mi.Ray3f(mi.Point3f(o), mi.Vector3f(direction)), active)
 
     def occluded(self, origins: np.ndarray, direction: np.ndarray) -> np.ndarray:
         """Whether rays from ``origins`` (M, 3) toward ``direction`` (3,) or (M, 3) hit any mesh."""
         M = np.shape(origins)[0]
-        if M == 0 or self._label_of_id.size == 1 and self._label_of_id[0] < 0:
+        if M == 0 or self._empty():
             return np.zeros(M, bool)
-        dd = np.broadcast_to(np.asarray(direction, np.float32), np.shape(origins))
-        hit = self.scene.ray_test(self._rays(origins, dd))
+        o, d = self._rays(origins, np.broadcast_to(np.asarray(direction, np.float64), np.shape(origins)))
+        hit = self.occluded_dr(o, d)
         self.dr.eval(hit)
         return np.asarray(hit, bool)
 
@@ -103,11 +125,9 @@ def _empty_hits(M: int) -> dict:
             "dp_du": np.zeros((M, 3), np.float32), "dp_dv": np.zeros((M, 3), np.float32)}
 
 
-def ground_hits(origin, dirs: np.ndarray) -> np.ndarray:
-    """Distance (M,) along unit ``dirs`` from ``origin`` ((3,) or (M, 3), above y = 0) to the ground plane
-    y = 0 (inf: none)."""
-    o_y = np.asarray(origin, np.float64)[..., 1]
-    d_y = np.asarray(dirs, np.float64)[:, 1]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t = np.where(d_y < 0, -o_y / d_y, np.inf)
-    return np.where(t > 0, t, np.inf)
+def ground_hits(o, d):
+    """Distance (Float64) along unit Dr.Jit directions ``d`` from ``o`` (Array3f64, above y = 0) to the ground
+    plane y = 0 (inf: none)."""
+    import drjit as dr
+    t = dr.select(d.y < 0, -o.y / d.y, dr.inf)
+    return dr.select(t > 0, t, dr.inf)
