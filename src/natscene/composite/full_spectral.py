@@ -112,7 +112,8 @@ def render_full_spectral(renderer: SetRenderer) -> tuple[np.ndarray, np.ndarray]
         n = sl.stop - sl.start
         out = np.zeros((h.kind.size, N), np.float32)
         bg = h.kind == KIND_SKY
-        out[bg] = np.tile(inp.plate[sl], (spp, 1))[bg]
+        bg_i = np.flatnonzero(bg)
+        out[bg_i] = inp.plate[sl.start + bg_i % n]
         rm = np.flatnonzero((h.kind == KIND_GROUND) | (h.kind == KIND_SURFACE))
         out[rm] = _radiance(r, inp, h, rm)
         fm = np.flatnonzero(h.kind == KIND_FILM)

@@ -113,13 +113,14 @@ class SetRenderer(SetGeometry):
 
     def irradiance_rgb(self, h: Hits, sel: np.ndarray) -> np.ndarray:
         """Irradiance (len(sel), 3) on the front side plus τ times the back side's (sun and sky dome)."""
-        n = h.n[sel]
-        E = self.sun_rgb[None] * h.sun_front[sel, None] + self.sky_irradiance(h, sel, self.dome.irradiance)
-        tr = np.where(h.kind[sel] == KIND_SURFACE, self.translucency[np.where(h.kind[sel] == KIND_SURFACE,
-                                                                                h.index[sel], -1)], 0.0)
+        E = self.sky_irradiance(h, sel, self.dome.irradiance)
+        E += self.sun_rgb[None] * h.sun_front[sel, None]
+        # τ of the samples (the translucency table's last entry, 0, for all but RGB surfaces)
+        tr = self.translucency[np.where(h.kind[sel] == KIND_SURFACE, h.index[sel], -1)]
         back = np.flatnonzero(tr > 0)
         if back.size:
-            Eb = self.sun_rgb[None] * h.sun_back[sel[back], None] + self.dome.irradiance(-n[back])
+            sb = sel[back]
+            Eb = self.sun_rgb[None] * h.sun_back[sb, None] + self.dome.irradiance(-h.n[sb])
             E[back] += tr[back, None] * Eb
         return E
 
@@ -127,11 +128,11 @@ class SetRenderer(SetGeometry):
     def sky_irradiance(h: Hits, sel: np.ndarray, irradiance) -> np.ndarray:
         """``irradiance(normals)`` (the sky dome's, RGB or spectral) of samples ``sel``: one evaluation for all
         ground samples (the flat ground's normal is up), one per mesh sample."""
-        ground = h.kind[sel] == KIND_GROUND
         up = irradiance(np.array([[0.0, 1.0, 0.0]]))
         out = np.empty((sel.size, up.shape[-1]), np.float32)
-        out[ground] = up
-        out[~ground] = irradiance(h.n[sel[~ground]])
+        out[:] = up
+        mesh = np.flatnonzero(h.kind[sel] != KIND_GROUND)
+        out[mesh] = irradiance(h.n[sel[mesh]])
         return out
 
     def transmittance(self, h: Hits, sel: np.ndarray) -> np.ndarray:
@@ -257,7 +258,8 @@ class SetRenderer(SetGeometry):
             n = sl.stop - sl.start
             out = np.zeros((h.kind.size, 3), np.float32)
             bg = h.kind == KIND_SKY
-            out[bg] = np.tile(plate[sl], (spp, 1))[bg]
+            bg_i = np.flatnonzero(bg)
+            out[bg_i] = plate[sl.start + bg_i % n]
             rm = np.flatnonzero((h.kind == KIND_GROUND) | (h.kind == KIND_SURFACE))
             out[rm] = self.radiance_rgb(h, rm)
             fm = np.flatnonzero(h.kind == KIND_FILM)
