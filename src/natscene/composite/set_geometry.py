@@ -258,8 +258,11 @@ class SetGeometry:
         L = dr.sqrt(D.x * D.x + D.y * D.y + D.z * D.z)
         return D / L, (D + ex) / L, (D + ey) / L
 
-    def blocks(self, block_rays: int = 1 << 17):
-        """Yield (pixel slice, dirs, ddx, ddy), the directions (spp·n, 3) sample-major, over blocks of pixels."""
+    def blocks(self, block_rays: int = 1 << 18):
+        """Yield (pixel slice, dirs, ddx, ddy), the directions (spp·n, 3) sample-major, over blocks of pixels.
+        The default, 2^18 rays, is for the RGB modes (the hits' fields and the RGB shading arrays, several
+        hundred bytes a ray): their peak memory stays below the full-spectral mode's, which passes smaller
+        blocks (81 floats a ray in each of its spectral arrays). Fewer blocks mean fewer kernel launches."""
         P = self.spec.camera.height * self.spec.camera.width
         step = max(1, block_rays // self.spec.spp)
         for a in range(0, P, step):
