@@ -434,14 +434,12 @@ def test_texture_derivatives_on_a_plane_are_the_neighbour_rays_offsets():
     divided by the tangents' lengths; a neighbour parallel to the plane gives zero."""
     from natscene.variant import select_variant
     select_variant(spectral=False)
-    import mitsuba as mi
-
     from natscene.composite.footprint import texture_derivative
+    from natscene.composite.vectors import array3f64 as v3
     rng = np.random.default_rng(6)
     d = np.c_[rng.uniform(-0.5, 0.5, (200, 2)), np.ones(200)]
     nd = d + np.c_[rng.normal(0, 0.01, (200, 2)), rng.normal(0, 0.01, 200)]
     nd[0] = [1.0, 0.0, 0.0]
-    v3 = lambda a: mi.Array3f64(*(mi.Float64(np.ascontiguousarray(a[:, k])) for k in range(3)))
     p = d / d[:, 2:]
     z = np.zeros((200, 3))
     f = texture_derivative(v3(z), v3(p), v3(z + [0, 0, -1.0]), v3(nd), v3(z + [2.0, 0, 0]), v3(z + [0, 3.0, 0]))

@@ -5,22 +5,19 @@ A camera sample has two neighbour rays, one sample spacing to the right and one 
 a surface at p with normal n, the neighbours are intersected with the tangent plane,
 p' = o + d'·((p − o)·n / (d'·n)), giving ∂p/∂x = p'_x − p and ∂p/∂y = p'_y − p. With the surface's
 parametrisation ∂p/∂u, ∂p/∂v, the texture-space derivatives are the least-squares solution of
-∂p/∂x = ∂p/∂u·∂u/∂x + ∂p/∂v·∂v/∂x (normal equations, 2×2), likewise for y. Dot products are written out
-(x + y) + z, without fused multiply-adds.
+∂p/∂x = ∂p/∂u·∂u/∂x + ∂p/∂v·∂v/∂x (normal equations, 2×2), likewise for y.
 """
 from __future__ import annotations
 
-
-def _dot(a, b):
-    return a.x * b.x + a.y * b.y + a.z * b.z
+from natscene.composite.vectors import dot
 
 
 def tangent_plane_offsets(o, p, n, d_offset):
     """∂p for a neighbour ray (origin ``o``, direction ``d_offset``) against the tangent plane (p, n); zero
     where the neighbour runs parallel to the plane."""
     import drjit as dr
-    num = _dot(p - o, n)
-    den = _dot(d_offset, n)
+    num = dot(p - o, n)
+    den = dot(d_offset, n)
     ok = dr.abs(den) > 1e-12
     t = dr.select(ok, num / dr.select(ok, den, 1.0), 0.0)
     return dr.select(ok, o + d_offset * t - p, 0.0)
@@ -31,8 +28,8 @@ def uv_derivatives(dp, dp_du, dp_dv):
     the tangents are degenerate)."""
     import drjit as dr
     import mitsuba as mi
-    a, b, c = _dot(dp_du, dp_du), _dot(dp_du, dp_dv), _dot(dp_dv, dp_dv)
-    r0, r1 = _dot(dp_du, dp), _dot(dp_dv, dp)
+    a, b, c = dot(dp_du, dp_du), dot(dp_du, dp_dv), dot(dp_dv, dp_dv)
+    r0, r1 = dot(dp_du, dp), dot(dp_dv, dp)
     det = a * c - b * b
     ok = dr.abs(det) > 1e-30 * dr.maximum(a * c, 1e-300)
     inv = dr.select(ok, 1.0 / dr.select(ok, det, 1.0), 0.0)

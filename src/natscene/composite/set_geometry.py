@@ -24,6 +24,7 @@ from natscene.composite.footprint import texture_derivative
 from natscene.composite.set_spec import SetSpec
 from natscene.composite.texture import MipTexture
 from natscene.composite.tracer import SetTracer, ground_hits
+from natscene.composite.vectors import array3f64, dot
 from natscene.spectral.grid import spectrum_to_rgb
 
 KIND_SKY, KIND_GROUND, KIND_SURFACE, KIND_FILM = -1, 0, 1, 2
@@ -102,13 +103,6 @@ class SetGeometry:
                       "cut": mi.Int32(np.asarray(cut_of, np.int32)), "tr": mi.Float(self.translucency)}
         self.timing = {"geometry": 0.0, "shading": 0.0}
 
-    def _vec(self, a):
-        """A (3,) vector or (M, 3) array as a Dr.Jit Array3f64."""
-        a = np.asarray(a, np.float64)
-        if a.ndim == 1:
-            return self.mi.Array3f64(*(float(x) for x in a))
-        return self.mi.Array3f64(*(self.mi.Float64(np.ascontiguousarray(a[:, k])) for k in range(3)))
-
     def _lookup_label(self, table: str, label):
         """Per-ray entry of a per-shape table (kind, index, cut-out image) for Dr.Jit labels (-1: none)."""
         tab = self._tabs[table]
@@ -143,15 +137,15 @@ class SetGeometry:
         M = dr.width(kind)
         if not np.any(self.sun_rgb > 0):
             return dr.zeros(mi.Float64, M), dr.zeros(mi.Float64, M)
-        l = self._vec(self.sun_dir)
+        l = array3f64(self.sun_dir)
         lf = mi.Vector3f(l)
-        nl = n.x * l.x + n.y * l.y + n.z * l.z
+        nl = dot(n, l)
         surf = kind == KIND_SURFACE
         tr = dr.gather(mi.Float, self._tabs["tr"], dr.select(surf, index, len(self.spec.surfaces)))
         lit = (kind >= 0) & (nl > 0)
         behind = surf & (nl < 0) & (tr > 0)
         on_ground = kind == KIND_GROUND
-        ngl = ng.x * l.x + ng.y * l.y + ng.z * l.z
+        ngl = dot(ng, l)
         out = []
         for sel, sign in ((lit, 1.0), (behind, -1.0)):
             side = dr.select(ngl < 0, -sign, sign)
@@ -168,14 +162,14 @@ class SetGeometry:
         ``pixels``: for a block of camera rays (sample-major), its number of pixels."""
         t0 = time.perf_counter()
         mi, dr = self.mi, self.dr
-        d = dirs if isinstance(dirs, mi.Array3f64) else self._vec(dirs)
+        d = dirs if isinstance(dirs, mi.Array3f64) else array3f64(dirs)
         M = dr.width(d)
         org = np.asarray(origin, np.float64)
         if M == 0:
             z = np.zeros((0, 3))
             return Hits(z, z, np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0), z, z, z, np.zeros((0, 2)),
                         None, None, np.zeros(0, np.float32), np.zeros(0, np.float32), pixels)
-        o = self._vec(org)
+        o = array3f64(org)
         g = self._mesh_hits(o, d)
         kind, index = self._lookup_label("kind", g["label"]), self._lookup_label("index", g["label"])
         t = g["t"]
@@ -201,10 +195,10 @@ class SetGeometry:
         if ddx is not None:
             mesh = kind > KIND_GROUND
             for nd in (ddx, ddy):
-                nd = nd if isinstance(nd, mi.Array3f64) else self._vec(nd)
+                nd = nd if isinstance(nd, mi.Array3f64) else array3f64(nd)
                 f = dr.select(mesh, texture_derivative(o, p, ng, nd, dp_du, dp_dv), 0.0)
                 if gr is not None:  # the plane y = 0: the neighbour ray's own ground point, over the extent
-                    tt = dr.select(nd.y < 0, -o.y / nd.y, dr.inf)
+                    tt = ground_hits(o, nd)
                     q = mi.Array2f64((o.x + nd.x * tt - p.x) * (1.0 / ex), (o.z + nd.z * tt - p.z) * (1.0 / ez))
                     f = dr.select(on, dr.select(dr.isfinite(tt), q, 1e6), f)
                 fp.append(f)
@@ -242,7 +236,7 @@ class SetGeometry:
         H, W = cam.height, cam.width
         offs = stratified_offsets(self.spec.spp)
         step = 1.0 / int(np.ceil(np.sqrt(self.spec.spp)))
-        right, up, fwd = (self._vec(v) for v in cam.basis())
+        right, up, fwd = (array3f64(v) for v in cam.basis())
         th = float(np.tan(np.radians(cam.fov) / 2))
         ex = right * (2 * th * (W / H) / W * step)
         ey = -up * (2 * th / H * step)

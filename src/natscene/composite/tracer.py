@@ -15,6 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from natscene.composite.mesh import TriMesh
+from natscene.composite.vectors import array3f64, dot
 
 
 class SetTracer:
@@ -52,11 +53,9 @@ class SetTracer:
         p.update()
         return mesh
 
-    def _rays(self, origins: np.ndarray, dirs: np.ndarray):
-        mi = self.mi
-        o = np.ascontiguousarray(np.broadcast_to(np.asarray(origins, np.float64), np.shape(dirs)).T)
-        v = np.ascontiguousarray(np.asarray(dirs, np.float64).T)
-        return mi.Array3f64(o[0], o[1], o[2]), mi.Array3f64(v[0], v[1], v[2])
+    @staticmethod
+    def _rays(origins: np.ndarray, dirs: np.ndarray):
+        return array3f64(np.broadcast_to(np.asarray(origins, np.float64), np.shape(dirs))), array3f64(dirs)
 
     def _empty(self):
         return self.n_shapes == 0 or self._label_of_id.size == 1 and self._label_of_id[0] < 0
@@ -81,7 +80,7 @@ class SetTracer:
                "t": dr.select(valid, mi.Float64(si.t), dr.inf)}
         d32 = mi.Vector3f(d)
         for key, v in (("n", si.n), ("sn", si.sh_frame.n)):
-            v = dr.select(v.x * d32.x + v.y * d32.y + v.z * d32.z > 0, -v, v)
+            v = dr.select(dot(v, d32) > 0, -v, v)
             out[key] = dr.select(valid, v, 0.0)
         out["uv"] = dr.select(valid, si.uv, 0.0)
         out["dp_du"] = dr.select(valid, si.dp_du, 0.0)
