@@ -13,8 +13,8 @@ settings), per transport model (`all_orders`, `dobashi`):
   reports about 6,000x);
 - ``noise_repeated``: the same figure measured without the two-halves shortcut, at two nodes (sigma_t 0.2 and
   0.5, g 0.85, beta 0.99): each node traced 3 times with other seeds, 6 independent half-runs per pixel (5 degrees
-  of freedom; the two-halves estimate of one run, 1 degree of freedom smoothed over 3x3 pixels, reads the median
-  ~15 % low and the p95 ~40 % high), with the weight windows and sky lobe on and off;
+  of freedom; the meta's two-halves estimate of one run, :func:`natscene.scatter.allorders.standard_error`, reads
+  them within a few per cent), with the weight windows and sky lobe on and off;
 - agreement with Mitsuba 3 ``volpath`` of every order (max_depth -1, no Russian roulette) on the tests'
   procedural cloud: keys ``volpath_mean_ratio`` and ``volpath_block_err_max`` (largest 8x8 block error)
   per (sigma_t, g, beta), for the composed tables.

@@ -257,6 +257,40 @@ def test_band_weights_closed_form():
     assert band_table(SUN_BANDS, 300)[257] == len(SUN_BANDS) - 1
 
 
+def test_standard_error_of_two_halves_reads_a_known_noise():
+    """The two-halves error estimate (meta.yaml's noise figures) on halves with a known relative noise: a lit
+    disk, bright in its core and dim at its edge, times 1 + 0.1 ε, ε unit normal noise constant over cells of
+    6x6 pixels (the cache's noise is correlated over a cell). The mean of two halves has relative standard error
+    0.1 / √2 at every pixel; the estimate's median must read it within -15 / +5 % (a one-degree-of-freedom
+    estimate averaged over 3x3 pixels reads it ~20 % low), also at the dim edge (within -25 / +10 %: the pixels
+    outside the disk must not dilute the pixels within 3 of them)."""
+    from scipy.ndimage import distance_transform_edt
+    from natscene.scatter.allorders import standard_error
+    rng = np.random.default_rng(1)
+    H, W, cell, sigma = 240, 320, 6, 0.1
+    yy, xx = np.mgrid[:H, :W]
+    r = np.hypot((yy - H / 2) / (H * 0.4), (xx - W / 2) / (W * 0.4))
+    lit = r < 1
+    edge = lit & (distance_transform_edt(lit) <= 3)          # within 3 pixels of the dark
+    m = np.where(lit, 0.05 + 10 * (1 - r) ** 2 * (1 + 0.5 * np.sin(xx / 7.0)), 0.0)
+
+    def noise():
+        return np.kron(rng.standard_normal((H // cell + 1, W // cell + 1)), np.ones((cell, cell)))[:H, :W]
+
+    true = sigma / np.sqrt(2)
+    med, med_edge, dark = [], [], []
+    for _ in range(4):
+        a, b = m * (1 + sigma * noise()), m * (1 + sigma * noise())
+        se = standard_error(a, b)
+        rel = se / np.where(lit, (a + b) / 2, 1.0)
+        med.append(np.median(rel[lit]) / true)
+        med_edge.append(np.median(rel[edge]) / true)
+        dark.append(float(np.abs(se[~lit]).max()))
+    assert 0.85 <= np.mean(med) <= 1.05, med
+    assert 0.75 <= np.mean(med_edge) <= 1.10, med_edge
+    assert max(dark) == 0.0                                  # no light, no error
+
+
 def test_sky_dome_lights_the_shadow_side(vol):
     """The skylight brightens the cloud where the sun does not reach: with the dome on, the darkest cloud
     pixels gain light, and a dome with zero radiance gives exactly the sun-only image."""

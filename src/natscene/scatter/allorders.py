@@ -234,14 +234,30 @@ def _trace_halves(scene: Scene, source, sigma: float, g: float, camera, n_photon
             for h in range(2)]
 
 
-def standard_error(half_a: np.ndarray, half_b: np.ndarray) -> np.ndarray:
-    """Per-pixel standard error of the mean of two independent halves (..., H, W): the square root of
-    ((a - b) / 2)², an unbiased estimate of the variance, averaged over 3x3 pixels (the error varies
-    slowly across the image; one difference alone is a one-degree-of-freedom estimate)."""
+def standard_error(half_a: np.ndarray, half_b: np.ndarray, window: int = 9) -> np.ndarray:
+    """Per-pixel standard error of the mean of two independent halves (..., H, W).
+
+    One difference gives a one-degree-of-freedom estimate of the variance, ((a - b) / 2)², whose square root reads
+    the median error a third low and the tail high (|N(0, 1)| has median 0.67 and 95th percentile 1.96). The
+    cache's noise is correlated over a cell, several pixels wide, so averaging the variance over 3x3 pixels adds
+    few degrees of freedom; averaging it over a wider window mixes bright and dim pixels, and the dim ones
+    inherit the bright ones' variance. So the relative variance ((a - b) / (a + b))² is averaged over
+    ``window`` x ``window`` pixels, over the pixels with light only (a normalised average: the pixels outside
+    the cloud do not dilute its edge), and scaled by each pixel's mean (a + b) / 2. On three of the main job's
+    nodes (sigma_t 0.2, 0.5, 1) the median and 95th percentile of the relative error so estimated are within
+    2-7 % of those of 5 independent repetitions of the node (10 halves); the 3x3 average of the variance read the
+    median 20 % low and the 95th percentile 27-53 % high. Pixels without light get the plain difference."""
     from scipy.ndimage import uniform_filter
-    v = ((np.asarray(half_a, np.float64) - np.asarray(half_b, np.float64)) / 2) ** 2
-    size = [1] * (v.ndim - 2) + [3, 3]
-    return np.sqrt(np.maximum(uniform_filter(v, size=size, mode="nearest"), 0.0)).astype(np.float32)   # >= 0 up to rounding
+    a = np.asarray(half_a, np.float64)
+    b = np.asarray(half_b, np.float64)
+    m = (a + b) / 2
+    lit = m > 0
+    rel = np.where(lit, ((a - b) / 2) ** 2 / np.where(lit, m, 1.0) ** 2, 0.0)
+    size = [1] * (m.ndim - 2) + [int(window), int(window)]
+    share = uniform_filter(lit.astype(np.float64), size=size, mode="constant")
+    avg = uniform_filter(rel, size=size, mode="constant") / np.maximum(share, 1e-12)
+    se = np.where(lit, np.sqrt(np.maximum(avg, 0.0)) * m, np.abs(a - b) / 2)
+    return se.astype(np.float32)
 
 
 def view_images(scene: Scene, camera, sigma: float, g: float, seed: int = 0) -> ViewImages:
