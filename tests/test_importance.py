@@ -1,4 +1,4 @@
-"""Weight windows of the all-orders photon tracing (natscene.scatter.importance, photons._weight_window) and the
+"""Weight windows of the all-orders photon tracing (natscene.scatter.importance, photons._walk) and the
 sky source's lobe toward the camera.
 
 Truths known independently of the code: splitting and Russian roulette keep every expected tally whatever the

@@ -18,7 +18,7 @@ Per cell of ``factor`` voxels the window's centre is
   clamped below at ``floor`` (relative to its maximum): V ≈ 1 on the skin the camera sees, ``floor`` deep
   inside,
 - τ the cell's optical thickness (σ_t times its mean density times its width): a photon crossing an optically
-  thin cell leaves tally samples weighted by a small μ_t / μ̄ (:func:`natscene.scatter.majorant.free_flight`),
+  thin cell leaves tally samples weighted by a small μ_t / μ̄ (:func:`natscene.scatter.majorant.flight_event`),
   so a thin cell needs proportionally more crossings for the same relative error (the cloud's thin edges),
 - c such that T = 1 on average where the photons collide first (so a new photon, of multiplier 1, starts
   inside its window).

@@ -22,7 +22,6 @@ import natscene.variant  # noqa: F401  (sets DRJIT_LIBLLVM_PATH before drjit loa
 import drjit as dr
 import mitsuba as mi
 
-from natscene.scatter.medium import ray_box_dr
 
 
 @dataclass
@@ -91,78 +90,72 @@ def _dda_state(p, w, t, grid: MajorantGrid):
     return ix, iy, iz, tmx, tmy, tmz
 
 
-@dr.syntax
-def free_flight(med, grid: MajorantGrid, p, w, sig_k: float, rng, active, tally=None, rate_floor: float = 0.0):
-    """Delta tracking from ``p`` along unit ``w`` inside the volume box: (distance, collided).
+def flight_event(med, grid: MajorantGrid, p, w, sig_k, rng, running, restart, t, t1, tau, cells, rate_floor):
+    """One event of delta tracking along the flight p + w s (s in [t, t1] inside the volume box): a tentative
+    collision or a crossing into the next majorant cell (an empty-space jump counts as a crossing).
 
-    ``sig_k`` = sigma_t · extinction_scale (mu_t = sig_k · rho). Lanes that leave the box return
-    collided = False.
+    ``cells`` = (ix, iy, iz, tmx, tmy, tmz), the DDA state (Amanatides & Woo 1987); lanes with ``restart`` set
+    it up at t (a new flight). ``sig_k`` = sigma_t · extinction_scale (mu_t = sig_k · rho); ``tau`` the
+    exponential optical depth left to the next tentative collision; ``rate_floor`` (1/world units) raises every
+    non-empty cell's majorant to at least that rate (more null collisions: thin cloud still gets tally samples
+    along each flight, and the flight's distribution is unchanged, since any majorant >= mu_t samples it exactly).
 
-    ``tally(x, ratio, mask)``, if given, is called at every tentative collision x (real or null) with
-    ratio = mu_t(x) / mu_bar(x): the tentative collisions are a Poisson process of rate mu_bar along the flight,
-    each surviving to x with the transmittance T(x), so Σ ratio f(x) over them is an unbiased estimate of the
-    flight's track integral ∫ T(s) mu_t(x(s)) f(x(s)) ds (the expected-value estimator of delta tracking; it
-    takes a sample wherever the majorant puts a tentative collision, also where real collisions are rare).
-    ``rate_floor`` (1/world units) raises every non-empty cell's majorant to at least that rate: more null
-    collisions, so that thin cloud, where few real collisions happen, still gets tally samples along each
-    flight (the flight's distribution is unchanged: any majorant >= mu_t samples it exactly).
+    Returns (t, tau, cells, x, ratio, inside, accept, escaped): ``inside`` marks the lanes whose event is a
+    tentative collision at x, with ratio = mu_t(x) / mu_bar(x), ``accept`` the real ones among them (probability
+    ratio), ``escaped`` the lanes whose flight left the box. The tentative collisions are a Poisson process of rate
+    mu_bar along the flight, each reached with the transmittance T(x), so Σ ratio f(x) over them estimates the
+    flight's track integral ∫ T mu_t f ds without bias (the expected-value estimator of delta tracking).
     """
-    t0, t1 = ray_box_dr(p, w, med.bbox_min, med.bbox_max)
     cx, cy, cz = grid.shape
     cell = mi.ScalarVector3f(*[float(v) for v in grid.cell])
-    ix, iy, iz, tmx, tmy, tmz = _dda_state(p, w, t0, grid)
+    ix, iy, iz, tmx, tmy, tmz = cells
+    big = 1e30
     sx = dr.select(w.x >= 0, 1, -1)
     sy = dr.select(w.y >= 0, 1, -1)
     sz = dr.select(w.z >= 0, 1, -1)
-    # parameter step between boundaries per axis
-    big = 1e30
     dtx = dr.select(dr.abs(w.x) > 1e-12, cell.x / dr.abs(w.x), big)
     dty = dr.select(dr.abs(w.y) > 1e-12, cell.y / dr.abs(w.y), big)
     dtz = dr.select(dr.abs(w.z) > 1e-12, cell.z / dr.abs(w.z), big)
-    t = mi.Float(t0)
-    tau = -dr.log(1.0 - rng.next_float32())
-    hit = mi.Bool(False)
-    running = mi.Bool(active & (t1 > t0))
-    while dr.hint(running, include=[rng]):
-        flat = mi.UInt32((iz * cy + iy) * cx + ix)
-        m = dr.gather(mi.Float, grid.dr_values, flat, running) * sig_k
-        jump = dr.gather(mi.Float, grid.dr_skip, flat, running)
-        # skip empty space: restart the DDA ``jump`` further on (nothing can collide on the way); a jump past
-        # the box face ends the flight (restarting the DDA exactly at the face can cycle in float32)
-        skip = running & (m <= 0) & (jump > 0)
-        leaves = skip & (t + jump >= t1)      # the jump crosses the box face: the photon escapes
-        running &= ~leaves
-        skip &= ~leaves
-        t_j = t + jump
-        jx, jy, jz, jtx, jty, jtz = _dda_state(p, w, t_j, grid)
-        t = dr.select(leaves, t1, dr.select(skip, t_j, t))
-        ix, iy, iz = dr.select(skip, jx, ix), dr.select(skip, jy, iy), dr.select(skip, jz, iz)
-        tmx, tmy, tmz = dr.select(skip, jtx, tmx), dr.select(skip, jty, tmy), dr.select(skip, jtz, tmz)
-        flat = mi.UInt32((iz * cy + iy) * cx + ix)
-        m = dr.gather(mi.Float, grid.dr_values, flat, running) * sig_k
-        m = dr.select(m > 0, dr.maximum(m, rate_floor), m)
-        t_next = dr.minimum(dr.minimum(dr.minimum(tmx, tmy), tmz), t1)
-        seg = dr.maximum(t_next - t, 0.0)
-        inside = running & (m * seg > tau)
-        tc = t + tau / dr.maximum(m, 1e-30)
-        r = med.rho(p + w * tc)
-        if tally is not None:
-            tally(p + w * tc, sig_k * r / dr.maximum(m, 1e-30), inside)
-        accept = inside & (rng.next_float32() * m < sig_k * r)
-        hit |= accept
-        # a rejected tentative collision restarts the exponential from tc in the same cell
-        t = dr.select(inside, tc, t_next)
-        tau = dr.select(inside, -dr.log(1.0 - rng.next_float32()), tau - m * seg)
-        adv = running & ~inside
-        ax = adv & (tmx <= tmy) & (tmx <= tmz)
-        ay = adv & ~ax & (tmy <= tmz)
-        az = adv & ~ax & ~ay
-        ix = dr.select(ax, ix + sx, ix)
-        tmx = dr.select(ax, tmx + dtx, tmx)
-        iy = dr.select(ay, iy + sy, iy)
-        tmy = dr.select(ay, tmy + dty, tmy)
-        iz = dr.select(az, iz + sz, iz)
-        tmz = dr.select(az, tmz + dtz, tmz)
-        left = (ix < 0) | (ix >= cx) | (iy < 0) | (iy >= cy) | (iz < 0) | (iz >= cz) | (t >= t1)
-        running &= ~accept & ~(adv & left)
-    return t, hit
+    # skip empty space: restart the DDA ``jump`` further on (nothing can collide on the way); a jump past the box
+    # face ends the flight (restarting the DDA exactly at the face can cycle in float32). A new flight restarts
+    # the DDA where it enters the box.
+    go = running & ~restart
+    flat = mi.UInt32((iz * cy + iy) * cx + ix)
+    m = dr.gather(mi.Float, grid.dr_values, flat, go) * sig_k
+    jump = dr.gather(mi.Float, grid.dr_skip, flat, go)
+    skip = go & (m <= 0) & (jump > 0)
+    leaves = skip & (t + jump >= t1)
+    running = running & ~leaves
+    skip = (skip & ~leaves) | restart
+    t_j = dr.select(restart, t, t + jump)
+    jx, jy, jz, jtx, jty, jtz = _dda_state(p, w, t_j, grid)
+    t = dr.select(leaves, t1, dr.select(skip, t_j, t))
+    ix, iy, iz = dr.select(skip, jx, ix), dr.select(skip, jy, iy), dr.select(skip, jz, iz)
+    tmx, tmy, tmz = dr.select(skip, jtx, tmx), dr.select(skip, jty, tmy), dr.select(skip, jtz, tmz)
+    flat = mi.UInt32((iz * cy + iy) * cx + ix)
+    m = dr.gather(mi.Float, grid.dr_values, flat, running) * sig_k
+    m = dr.select(m > 0, dr.maximum(m, rate_floor), m)
+    t_next = dr.minimum(dr.minimum(dr.minimum(tmx, tmy), tmz), t1)
+    seg = dr.maximum(t_next - t, 0.0)
+    inside = running & (m * seg > tau)
+    tc = t + tau / dr.maximum(m, 1e-30)
+    x = p + w * tc
+    r = med.rho(x)
+    ratio = sig_k * r / dr.maximum(m, 1e-30)
+    accept = inside & (rng.next_float32() * m < sig_k * r)
+    # a rejected tentative collision restarts the exponential from tc in the same cell
+    t = dr.select(inside, tc, t_next)
+    tau = dr.select(inside, -dr.log(1.0 - rng.next_float32()), tau - m * seg)
+    adv = running & ~inside
+    ax = adv & (tmx <= tmy) & (tmx <= tmz)
+    ay = adv & ~ax & (tmy <= tmz)
+    az = adv & ~ax & ~ay
+    ix = dr.select(ax, ix + sx, ix)
+    tmx = dr.select(ax, tmx + dtx, tmx)
+    iy = dr.select(ay, iy + sy, iy)
+    tmy = dr.select(ay, tmy + dty, tmy)
+    iz = dr.select(az, iz + sz, iz)
+    tmz = dr.select(az, tmz + dtz, tmz)
+    left = (ix < 0) | (ix >= cx) | (iy < 0) | (iy >= cy) | (iz < 0) | (iz >= cz) | (t >= t1)
+    escaped = leaves | (adv & left)
+    return t, tau, (ix, iy, iz, tmx, tmy, tmz), x, ratio, inside, accept, escaped
