@@ -342,6 +342,8 @@ def _walk(s: _Walk, rec_p, rec_w, rec_wts, rec_mult, rec_k, rec_vis, rec_state, 
     nch = len(rec_wts)
     lane = dr.arange(mi.UInt32, lanes)
     rec = mi.UInt32(lane)
+    # the lane count and the slots enter the kernel as opaque values: every pass reuses one compiled kernel
+    lanes, cap = dr.opaque(mi.UInt32, lanes), dr.opaque(mi.UInt32, cap)
     p = dr.gather(mi.Point3f, rec_p, rec)
     w = dr.gather(mi.Vector3f, rec_w, rec)
     wts = [dr.gather(mi.Float, x, rec) for x in rec_wts]
