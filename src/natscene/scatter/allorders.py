@@ -68,6 +68,8 @@ class AllOrdersSettings:
     sky_lobe_g: float = 0.7               # the lobe's HG asymmetry
     camera_lobe: float = 0.6              # share of the visible scatterings drawn around the direction to the
                                           # camera (angle biasing; the frames' renderer turns it off)
+    noise_target: tuple = (0.0, 0.0)      # median, p95 of a node's relative standard error (0: fixed budget)
+    max_budget_scale: float = 8.0         # most photons a node gets, in units of the collision budget's
 
 
 def settings_from_config(precompute: dict) -> AllOrdersSettings:
@@ -260,8 +262,52 @@ def standard_error(half_a: np.ndarray, half_b: np.ndarray, window: int = 9) -> n
     return se.astype(np.float32)
 
 
-def view_images(scene: Scene, camera, sigma: float, g: float, seed: int = 0) -> ViewImages:
-    """Band images of the sun's and the sky's light at (sigma, g) for ``camera`` (see the module docstring)."""
+@dataclass
+class _Part:
+    """One source's band images of the two halves, with the photons, collisions, order histogram behind them."""
+
+    halves: np.ndarray
+    histogram: np.ndarray
+    photons: int
+    collisions: int
+    truncated: float
+
+    def merged(self, other: "_Part") -> "_Part":
+        """The two runs as one: each image and the histogram are per unit source power, so they average
+        weighted by photons (the cache and the gather are linear in the tallies)."""
+        a, b = self.photons, other.photons
+        return _Part(((a * self.halves.astype(np.float64) + b * other.halves) / (a + b)).astype(np.float32),
+                     (a * self.histogram + b * other.histogram) / (a + b), a + b,
+                     self.collisions + other.collisions, max(self.truncated, other.truncated))
+
+
+def _part(scene: Scene, source, sigma: float, g: float, camera, n_photons: int, bands, k_min: int, seed: int,
+          depth, window, channels: int, vint) -> _Part:
+    """``n_photons`` of ``source`` traced as two halves and gathered into band images."""
+    halves = _trace_halves(scene, source, sigma, g, camera, n_photons, bands, k_min, seed, depth, window)
+    return _Part(_images(scene, camera, sigma, halves, bands, channels, vint), sum(h.histogram for h in halves),
+                 int(sum(h.photons for h in halves)), int(sum(h.collisions for h in halves)),
+                 float(max(h.truncated for h in halves)))
+
+
+def budget_scale(noise: tuple, target: tuple) -> float:
+    """The photon count, as a multiple of the present one, at which a node's relative standard error (median,
+    p95) meets ``target`` (0 = no target for that figure): the error falls as 1 / sqrt(photons)."""
+    need = 1.0
+    for x, t in zip(noise, target):
+        if t > 0:
+            need = max(need, (float(x) / float(t)) ** 2)
+    return need
+
+
+def view_images(scene: Scene, camera, sigma: float, g: float, seed: int = 0, noise=None) -> ViewImages:
+    """Band images of the sun's and the sky's light at (sigma, g) for ``camera`` (see the module docstring).
+
+    ``noise``: a function of the :class:`ViewImages` that returns the node's relative standard error (median,
+    p95 over its cloud pixels). With it and a ``noise_target``, the node is topped up (more photons of both
+    sources, fresh seeds, merged into the halves) until the error meets the target, at most twice and to at most
+    ``max_budget_scale`` times the collision budget's photons: the thick nodes, whose forward-peaked light
+    reaches the camera through few paths, get the photons; the thin ones, already within the target, none."""
     st = scene.settings
     H, W = camera.height, camera.width
     nb_sun, nb_sky = len(st.sun_bands), len(st.sky_bands)
@@ -269,30 +315,45 @@ def view_images(scene: Scene, camera, sigma: float, g: float, seed: int = 0) -> 
         sky = np.zeros((2, 4, nb_sky, H, W), np.float32) if scene.sky is not None else None
         return ViewImages(np.zeros((2, nb_sun, H, W), np.float32), sky, np.ones(nb_sun),
                           None if sky is None else np.ones(nb_sky), {})
-    stats = {}
     from natscene.scatter.inscatter import weighted_voxel_integrals
     depth = scene.camera_depth_voxels(camera)
     vint = weighted_voxel_integrals(scene.med, depth, sigma * scene.volume.extinction_scale)
     win = weight_window(scene, scene.sun, sigma, g, camera, seed) if st.importance else None
     n_sun = photons_for(scene, scene.sun, sigma, g, camera, st.sun_collisions, 10 ** 9, seed,
                         most=st.sun_photons_max, window=win, pilot=16384 if win else 32768)
-    sun_halves = _trace_halves(scene, scene.sun, sigma, g, camera, n_sun, st.sun_bands, 2, seed, depth, win)
-    sun_img = _images(scene, camera, sigma, sun_halves, st.sun_bands, 1, vint)[:, 0]
-    stats.update(sun_photons=int(sum(h.photons for h in sun_halves)),
-                 sun_collisions=int(sum(h.collisions for h in sun_halves)),
-                 sun_truncated=float(max(h.truncated for h in sun_halves)))
-    sky_img = sky_r = None
+    jobs = [(scene.sun, n_sun, st.sun_bands, 2, seed, win, 1)]
     if scene.sky is not None:
         sky = (scene.sky.toward(camera.position, st.sky_lobe_g, st.sky_lobe_share) if st.sky_lobe_share > 0
                else scene.sky)
         win = weight_window(scene, sky, sigma, g, camera, seed + 7919) if st.importance else None
         n_sky = photons_for(scene, sky, sigma, g, camera, st.sky_collisions, 10 ** 9, seed + 7919,
                             most=st.sky_photons_max, window=win, pilot=16384 if win else 32768)
-        sky_halves = _trace_halves(scene, sky, sigma, g, camera, n_sky, st.sky_bands, 1, seed + 7919, depth,
-                                   win)
-        sky_img = _images(scene, camera, sigma, sky_halves, st.sky_bands, 4, vint)
-        sky_r = fit_ratios(st.sky_bands, sum(h.histogram for h in sky_halves))
-        stats.update(sky_photons=int(sum(h.photons for h in sky_halves)),
-                     sky_collisions=int(sum(h.collisions for h in sky_halves)))
-    return ViewImages(sun_img, sky_img, fit_ratios(st.sun_bands, sum(h.histogram for h in sun_halves)), sky_r,
-                      stats)
+        jobs.append((sky, n_sky, st.sky_bands, 1, seed + 7919, win, 4))
+
+    def run(scale: float, round_: int) -> list:
+        return [_part(scene, src, sigma, g, camera, max(2, int(round(n * scale))), bands, k_min,
+                      s + 1_000_003 * round_, depth, w, ch, vint) for src, n, bands, k_min, s, w, ch in jobs]
+
+    def result(parts) -> ViewImages:
+        sun, sky = parts[0], (parts[1] if len(parts) > 1 else None)
+        stats = dict(sun_photons=sun.photons, sun_collisions=sun.collisions, sun_truncated=sun.truncated)
+        if sky is not None:
+            stats.update(sky_photons=sky.photons, sky_collisions=sky.collisions)
+        return ViewImages(sun.halves[:, 0], None if sky is None else sky.halves,
+                          fit_ratios(st.sun_bands, sun.histogram),
+                          None if sky is None else fit_ratios(st.sky_bands, sky.histogram), stats)
+
+    parts = run(1.0, 0)
+    vi = result(parts)
+    scale = 1.0
+    if noise is not None and max(st.noise_target) > 0:
+        for round_ in (1, 2):
+            est = noise(vi)
+            want = min(scale * budget_scale(est, st.noise_target) * 1.1, float(st.max_budget_scale))
+            if want <= scale * 1.05:
+                break
+            parts = [a.merged(b) for a, b in zip(parts, run(want - scale, round_))]
+            scale = want
+            vi = result(parts)
+        vi.stats["budget_scale"] = scale
+    return vi

@@ -110,6 +110,16 @@ def geometry_images(camera, volume, sun_dir, t_hit: np.ndarray) -> tuple[np.ndar
     return t_c.astype(np.float32), cos_t.astype(np.float32), foot.astype(np.float32)
 
 
+def check_noise_target(settings) -> None:
+    """``noise_target`` is (median, p95) in [0, 1] and ``max_budget_scale`` >= 1, else InputError naming the key."""
+    t = tuple(settings.noise_target)
+    if len(t) != 2 or not all(0.0 <= float(x) <= 1.0 for x in t):
+        raise InputError(f"config key 'precompute.all_orders.noise_target': needs [median, p95] in [0, 1], got {list(t)}")
+    if not float(settings.max_budget_scale) >= 1.0:
+        raise InputError(f"config key 'precompute.all_orders.max_budget_scale': must be >= 1, "
+                         f"got {settings.max_budget_scale}")
+
+
 def _stats(values: list) -> dict | None:
     v = np.concatenate(values) if values else np.zeros(0)
     return {"median": float(np.median(v)), "p95": float(np.percentile(v, 95))} if v.size else None
@@ -178,11 +188,37 @@ def skylight_dome(sun_dir, sky: dict | None):
     return daylight_dome(sun_dir, float(sky.get("turbidity", 3.0)))
 
 
+def _node_noise(vi, sun_bands, sky_bands, sky_w, foot, single_sun) -> dict:
+    """Per-pixel relative standard error of one node's composed multiple scattering (two-halves estimate,
+    :func:`natscene.scatter.allorders.standard_error`) over its cloud pixels, per ``<part>.beta<b>``: the sun's
+    (orders >= 2), the sky's (R + G + B, orders >= 1), the two together (luminance, weights ``sky_w`` of the
+    dome's R, G, B and the ground) and the two together over the composed pixel (``single_sun``: its order 1
+    over beta)."""
+    from natscene.scatter.allorders import standard_error
+    from natscene.scatter.bands import band_weights
+    out = {}
+    for b in NOISE_BETAS:
+        cs = band_weights(sun_bands, vi.sun_ratios, b)[0]
+        ck = band_weights(sky_bands, vi.sky_ratios, b)[0]
+        halves = [np.tensordot(cs, vi.sun_halves[h], 1) for h in range(2)]
+        sky_halves = [np.tensordot(ck, vi.sky_halves[h][:3].sum(0), 1) for h in range(2)]
+        both = [halves[h] + np.tensordot(ck, np.tensordot(sky_w, vi.sky_halves[h], 1), 1) for h in range(2)]
+        for part, (x, y) in (("sun", halves), ("sky", sky_halves), ("sun_and_sky", both)):
+            m = (x + y) / 2
+            se = standard_error(x, y)
+            ok = foot & (m > 0)
+            out[f"{part}.beta{b:g}"] = (se[ok] / m[ok]).astype(np.float32)
+            if part == "sun_and_sky":          # the same error over the composed cloud pixel
+                pixel = b * single_sun + m
+                ok = foot & (pixel > 0)
+                out[f"pixel.beta{b:g}"] = (se[ok] / pixel[ok]).astype(np.float32)
+    return out
+
+
 def _all_orders_multiple(volume, camera, sun_dir, sigmas, gs, settings, sky, seed, log, single):
     """Band images of the sun's and the sky's light over the (g, sigma_t) grid, their ratios and noise
     (``single``: the precompute's :func:`natscene.scatter.single.march_view` of the grid)."""
     from natscene.scatter.allorders import Lighting, Scene, view_images
-    from natscene.scatter.bands import band_weights
     from natscene.scatter.skylight import irradiance
     from natscene.sky.daylight import preetham_rgb
     dome = skylight_dome(sun_dir, sky)
@@ -207,36 +243,33 @@ def _all_orders_multiple(volume, camera, sun_dir, sigmas, gs, settings, sky, see
     foot = single["footprint"] > 0
     counts = {"sun_photons": 0, "sun_collisions": 0, "sky_photons": 0, "sky_collisions": 0}
     truncated = 0.0
-    from natscene.scatter.allorders import standard_error
+    scales = []
     todo = [(i, j) for i in range(Ns) if sigmas[i] > 0 for j in range(Ng)]
     t0 = time.perf_counter()
     for n, (i, j) in enumerate(todo):
-        vi = view_images(scene, camera, float(sigmas[i]), float(gs[j]), seed=seed * 100003 + i * 101 + j)
+        single_sun = hg(cos_q, gs[j]) * single["S_sun"][i]          # the pixel's order 1 over beta
+
+        def node_noise(vi):
+            return _node_noise(vi, sb, kb, sky_w, foot, single_sun)
+
+        def worst(vi):   # the node's figure that the top-up aims at: sun and sky together, the worst beta
+            e = [v for k, v in node_noise(vi).items() if k.startswith("sun_and_sky.") and v.size]
+            return tuple(max((float(np.percentile(v, q)) for v in e), default=0.0) for q in (50, 95))
+
+        vi = view_images(scene, camera, float(sigmas[i]), float(gs[j]), seed=seed * 100003 + i * 101 + j,
+                         noise=worst)
         sun_ms[:, j, i] = vi.sun
         sky_ms[:, :, j, i] = vi.sky
         sun_r[j, i], sky_r[j, i] = vi.sun_ratios, vi.sky_ratios
         for k in counts:
             counts[k] += int(vi.stats.get(k, 0))
         truncated = max(truncated, vi.stats.get("sun_truncated", 0.0))
-        single_sun = hg(cos_q, gs[j]) * single["S_sun"][i]          # the pixel's order 1 over beta
-        for b in NOISE_BETAS:
-            cs = band_weights(sb, vi.sun_ratios, b)[0]
-            ck = band_weights(kb, vi.sky_ratios, b)[0]
-            halves = [np.tensordot(cs, vi.sun_halves[h], 1) for h in range(2)]
-            sky_halves = [np.tensordot(ck, vi.sky_halves[h][:3].sum(0), 1) for h in range(2)]
-            both = [halves[h] + np.tensordot(ck, np.tensordot(sky_w, vi.sky_halves[h], 1), 1) for h in range(2)]
-            for part, (x, y) in (("sun", halves), ("sky", sky_halves), ("sun_and_sky", both)):
-                m = (x + y) / 2
-                se = standard_error(x, y)
-                ok = foot & (m > 0)
-                noise[f"{part}.beta{b:g}"].append((se[ok] / m[ok]).astype(np.float32))
-                if part == "sun_and_sky":          # the same error over the composed cloud pixel
-                    pixel = b * single_sun + m
-                    ok = foot & (pixel > 0)
-                    noise[f"pixel.beta{b:g}"].append((se[ok] / pixel[ok]).astype(np.float32))
+        scales.append(float(vi.stats.get("budget_scale", 1.0)))
+        for k, v in node_noise(vi).items():
+            noise[k].append(v)
         el = time.perf_counter() - t0
         log(f"all orders sigma_t={sigmas[i]:g} g={gs[j]:g}: {vi.stats.get('sun_photons', 0)} sun + "
-            f"{vi.stats.get('sky_photons', 0)} sky photons ({n + 1}/{len(todo)}, {el:.0f} s, "
+            f"{vi.stats.get('sky_photons', 0)} sky photons (budget x{scales[-1]:.2f}; {n + 1}/{len(todo)}, {el:.0f} s, "
             f"about {el / (n + 1) * (len(todo) - n - 1):.0f} s left)")
     dirs = camera.ray_directions()
     view_rgb = preetham_rgb(dirs.reshape(-1, 3), sun_dir, float((sky or {}).get("turbidity", 3.0))).reshape(-1, 3)
@@ -248,11 +281,16 @@ def _all_orders_multiple(volume, camera, sun_dir, sigmas, gs, settings, sky, see
                      "view_mean_rgb": view_rgb.mean(0).tolist(), "irradiance_rgb": irradiance(dome).tolist(),
                      "sun_elevation_sin": float(s[1] / np.linalg.norm(s))},
         "photons": counts, "truncated_light": float(truncated),
+        # photons per node as a multiple of the collision budget's (noise_target tops the noisy nodes up),
+        # per node, sigma_t > 0 in order, g within each sigma_t
+        "budget_scale": [round(x, 3) for x in scales],
         "settings": {"sun_collisions": int(settings.sun_collisions), "sky_collisions": int(settings.sky_collisions),
                      "sun_photons_max": int(settings.sun_photons_max), "sky_photons_max": int(settings.sky_photons_max),
                      "fine_voxels": int(settings.fine_voxels), "coarse_voxels": int(settings.coarse_voxels),
                      "guide_width": [float(x) for x in settings.guide_width], "max_order": int(settings.max_order),
-                     "majorant_voxels": int(settings.majorant_voxels), "camera_lobe": float(settings.camera_lobe)},
+                     "majorant_voxels": int(settings.majorant_voxels), "camera_lobe": float(settings.camera_lobe),
+                     "noise_target": [float(x) for x in settings.noise_target],
+                     "max_budget_scale": float(settings.max_budget_scale)},
         # per-pixel standard error of the composed multiple-scattering term divided by the term, over the
         # cloud pixels and every (g, sigma_t) node: the sun's (orders >= 2), the sky's (R+G+B, orders >= 1), the
         # two together (luminance, the sun's irradiance 1 and the dome as it lit the cloud); "pixel": the error of
@@ -280,6 +318,8 @@ def precompute(volume, camera, sun_dir, sigmas=DEFAULT_SIGMAS, gs=DEFAULT_GS, n_
         raise InputError(f"config key 'precompute.n_m': must be >= 1, got {n_m}")
     if spp < 1:
         raise InputError(f"config key 'precompute.spp': must be >= 1, got {spp}")
+    if transport == "all_orders" and all_orders is not None:
+        check_noise_target(all_orders)
     log = log or (lambda msg: None)
     t0 = time.perf_counter()
     med = make_medium(volume, sun_dir)
