@@ -29,6 +29,7 @@ collisions in it, and a thin cloud (sigma_t = 0.1) makes five times fewer collis
 thick one (sigma_t = 1). With ``importance`` the photons split where the camera sees the cloud and its flux is
 low and are rouletted deep inside (:func:`weight_window`, :mod:`natscene.scatter.importance`), and a share of
 the sky photons comes from a lobe of directions toward the camera (:meth:`natscene.scatter.photons.SkySource.toward`).
+With a ``noise_target`` a node that misses it after its budget is topped up with more photons (:func:`view_images`).
 """
 from __future__ import annotations
 
@@ -306,8 +307,8 @@ def view_images(scene: Scene, camera, sigma: float, g: float, seed: int = 0, noi
     ``noise``: a function of the :class:`ViewImages` that returns the node's relative standard error (median,
     p95 over its cloud pixels). With it and a ``noise_target``, the node is topped up (more photons of both
     sources, fresh seeds, merged into the halves) until the error meets the target, at most twice and to at most
-    ``max_budget_scale`` times the collision budget's photons: the thick nodes, whose forward-peaked light
-    reaches the camera through few paths, get the photons; the thin ones, already within the target, none."""
+    ``max_budget_scale`` times the collision budget's photons: the noisy nodes (thick, strongly forward
+    scattering) get the photons, a node already within the target none."""
     st = scene.settings
     H, W = camera.height, camera.width
     nb_sun, nb_sky = len(st.sun_bands), len(st.sky_bands)
