@@ -50,14 +50,16 @@ MODEL: dict[str, dict[str, float]] = {  # bytes per unit / MB; n = measured jobs
     "pigment_maps": {"base": 165.6, "pixels": 725.4 / MB},  # n=4, max residual 4.0 MB
     "point_scatter": {"base": 227.1, "voxels": 67.19 / MB},  # n=8, max residual 4.6 MB
     # all-orders transport: one main-job run (cumulus 160x112x160, 320x240, 7 sigma_t x 5 g, 8 + 4x3 bands):
-    # 1655 MB peak, 55.9 M table values -> 22.5 bytes per value over base and voxels
+    # 1655 MB peak, 55.9 M table values -> 22.5 bytes per value over base and voxels; with the noise target's
+    # top-ups (up to 8x the photons) 1777 MB peak of the declared 2200 (fresh-clone run of 726a883)
     "precompute_all_orders": {"base": 365.9, "table_values": 22.5 / MB, "voxels": 12.15 / MB},  # n=1
     "precompute": {"base": 365.9, "paths": 353.6 / MB, "pixels": 0 / MB, "table_values": 0 / MB, "voxels": 12.15 / MB},  # n=5, max residual 145.3 MB
     "recolour": {"base": 288.7, "pixels": 452.4 / MB},  # n=3, max residual 0.5 MB
     "render_frame": {"base": 467.5, "paths": 0 / MB, "pixels": 1323 / MB, "voxels": 44.89 / MB},  # n=8, max residual 85.4 MB
     # all-orders frames: the photons' wavefront grows with the collision budget, 4.7 bytes per collision (one
     # 640x480 main-job frame at 4 M and 37.5 M collisions: 1243 and 1401 MB); the base is raised so that the
-    # main job's frames (1387-1470 MB at 31 M collisions, one run) sit under the model
+    # main job's frames (31 M + 23 M collisions: 1387-1470 MB in an earlier run, 1251-1288 MB of the declared
+    # 2100 in the fresh-clone run of 726a883) sit under the model
     "render_frame_all_orders": {"base": 708.0, "pixels": 1323 / MB, "voxels": 44.89 / MB,
                                 "collisions": 4.7 / MB},  # n=26 + 2
     "sky": {"base": 204.5, "pixels": 684.8 / MB},  # n=3, max residual 8.9 MB
