@@ -188,6 +188,25 @@ def skylight_dome(sun_dir, sky: dict | None):
     return daylight_dome(sun_dir, float(sky.get("turbidity", 3.0)))
 
 
+def sky_luminance_weights(sun_dir, dome) -> np.ndarray:
+    """Weights that compose the sky's four traced channels (the dome's R, G, B and a unit-radiance ground) in
+    luminance for the noise figures: Rec. 709 luma of R, G, B, and of a ground of albedo 0.2 lit by the sun
+    (irradiance 1 at ``sun_dir``) and the dome."""
+    from natscene.color import LUMA_709
+    from natscene.scatter.skylight import ground_radiance, irradiance
+    s_dir = np.asarray(sun_dir, np.float64) / np.linalg.norm(sun_dir)
+    ground = ground_radiance(np.full(3, 0.2), max(float(s_dir[1]), 0.0), irradiance(dome))
+    return np.concatenate([LUMA_709, [float(ground @ LUMA_709)]])
+
+
+def target_figure(noise: dict) -> tuple[float, float]:
+    """The figure a node's noise target is checked against (``precompute.all_orders.noise_target``): of the
+    per-pixel relative standard errors of :func:`_node_noise`, the sun and sky composed together, the median and
+    the p95 over the cloud pixels, each the worst of the betas."""
+    e = [v for k, v in noise.items() if k.startswith("sun_and_sky.") and v.size]
+    return tuple(max((float(np.percentile(v, q)) for v in e), default=0.0) for q in (50, 95))
+
+
 def _node_noise(vi, sun_bands, sky_bands, sky_w, foot, single_sun) -> dict:
     """Per-pixel relative standard error of one node's composed multiple scattering (two-halves estimate,
     :func:`natscene.scatter.allorders.standard_error`) over its cloud pixels, per ``<part>.beta<b>``: the sun's
@@ -233,12 +252,9 @@ def _all_orders_multiple(volume, camera, sun_dir, sigmas, gs, settings, sky, see
     noise = {f"{part}.beta{b:g}": [] for part in ("sun", "sky", "sun_and_sky", "pixel") for b in NOISE_BETAS}
     # the composed multiple scattering as the sun (irradiance 1) and the dome light the cloud, in luminance:
     # the dome's R, G, B and the ground (albedo 0.2 under the sun and the dome), and the pixel's single scattering
-    from natscene.color import LUMA_709
     from natscene.phase import hg
-    from natscene.scatter.skylight import ground_radiance
     s_dir = np.asarray(sun_dir, np.float64) / np.linalg.norm(sun_dir)
-    ground = ground_radiance(np.full(3, 0.2), max(float(s_dir[1]), 0.0), irradiance(dome))
-    sky_w = np.concatenate([LUMA_709, [float(ground @ LUMA_709)]])
+    sky_w = sky_luminance_weights(s_dir, dome)
     cos_q = camera.ray_directions() @ s_dir
     foot = single["footprint"] > 0
     counts = {"sun_photons": 0, "sun_collisions": 0, "sky_photons": 0, "sky_collisions": 0}
@@ -252,12 +268,8 @@ def _all_orders_multiple(volume, camera, sun_dir, sigmas, gs, settings, sky, see
         def node_noise(vi):
             return _node_noise(vi, sb, kb, sky_w, foot, single_sun)
 
-        def worst(vi):   # the node's figure that the top-up aims at: sun and sky together, the worst beta
-            e = [v for k, v in node_noise(vi).items() if k.startswith("sun_and_sky.") and v.size]
-            return tuple(max((float(np.percentile(v, q)) for v in e), default=0.0) for q in (50, 95))
-
         vi = view_images(scene, camera, float(sigmas[i]), float(gs[j]), seed=seed * 100003 + i * 101 + j,
-                         noise=worst)
+                         noise=lambda vi: target_figure(node_noise(vi)))
         sun_ms[:, j, i] = vi.sun
         sky_ms[:, :, j, i] = vi.sky
         sun_r[j, i], sky_r[j, i] = vi.sun_ratios, vi.sky_ratios
