@@ -130,10 +130,9 @@ def repeated_noise_target(vol, camera, sun, settings, sky=None, nodes=((0.5, 0.8
     ``meta.yaml`` reports, the mean over the runs), their budget scales and the seconds per node."""
     from natscene.phase import hg
     from natscene.scatter.allorders import Lighting, Scene, view_images
-    from natscene.scatter.bands import band_weights
     from natscene.scatter.single import march_view
-    from natscene.scatter.tables import (NOISE_BETAS, _node_noise, skylight_dome, sky_luminance_weights,
-                                         target_figure)
+    from natscene.scatter.tables import (NOISE_BETAS, _node_noise, composed_halves, skylight_dome,
+                                         sky_luminance_weights, target_figure)
     dome = skylight_dome(sun, sky)
     scene = Scene(vol, Lighting(np.asarray(sun), dome), settings)
     sky_w = sky_luminance_weights(sun, dome)
@@ -154,11 +153,7 @@ def repeated_noise_target(vol, camera, sun, settings, sky=None, nodes=((0.5, 0.8
             estimates.append({b: est[f"sun_and_sky.beta{b:g}"] for b in NOISE_BETAS})
             scales.append(float(vi.stats.get("budget_scale", 1.0)))
             for b in NOISE_BETAS:
-                cs = band_weights(settings.sun_bands, vi.sun_ratios, b)[0]
-                ck = band_weights(settings.sky_bands, vi.sky_ratios, b)[0]
-                for h in range(2):
-                    halves[b].append(np.tensordot(cs, vi.sun_halves[h], 1)
-                                     + np.tensordot(ck, np.tensordot(sky_w, vi.sky_halves[h], 1), 1))
+                halves[b] += composed_halves(vi, settings.sun_bands, settings.sky_bands, sky_w, b)["sun_and_sky"]
         node = {"seconds_per_node": round((time.perf_counter() - t0) / reps, 1), "budget_scale": scales}
         for b in NOISE_BETAS:
             x = np.asarray(halves[b], np.float64)

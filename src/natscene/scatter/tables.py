@@ -207,6 +207,19 @@ def target_figure(noise: dict) -> tuple[float, float]:
     return tuple(max((float(np.percentile(v, q)) for v in e), default=0.0) for q in (50, 95))
 
 
+def composed_halves(vi, sun_bands, sky_bands, sky_w, beta: float) -> dict:
+    """The two halves of one node's composed multiple scattering at albedo ``beta`` (Σ_b c_b(β) T_b per half):
+    ``sun`` (orders >= 2), ``sky`` (R + G + B, orders >= 1) and ``sun_and_sky`` (luminance, weights ``sky_w`` of
+    the dome's R, G, B and the ground, :func:`sky_luminance_weights`)."""
+    from natscene.scatter.bands import band_weights
+    cs = band_weights(sun_bands, vi.sun_ratios, beta)[0]
+    ck = band_weights(sky_bands, vi.sky_ratios, beta)[0]
+    sun = [np.tensordot(cs, vi.sun_halves[h], 1) for h in range(2)]
+    sky = [np.tensordot(ck, vi.sky_halves[h][:3].sum(0), 1) for h in range(2)]
+    both = [sun[h] + np.tensordot(ck, np.tensordot(sky_w, vi.sky_halves[h], 1), 1) for h in range(2)]
+    return {"sun": sun, "sky": sky, "sun_and_sky": both}
+
+
 def _node_noise(vi, sun_bands, sky_bands, sky_w, foot, single_sun) -> dict:
     """Per-pixel relative standard error of one node's composed multiple scattering (two-halves estimate,
     :func:`natscene.scatter.allorders.standard_error`) over its cloud pixels, per ``<part>.beta<b>``: the sun's
@@ -214,15 +227,9 @@ def _node_noise(vi, sun_bands, sky_bands, sky_w, foot, single_sun) -> dict:
     dome's R, G, B and the ground) and the two together over the composed pixel (``single_sun``: its order 1
     over beta)."""
     from natscene.scatter.allorders import standard_error
-    from natscene.scatter.bands import band_weights
     out = {}
     for b in NOISE_BETAS:
-        cs = band_weights(sun_bands, vi.sun_ratios, b)[0]
-        ck = band_weights(sky_bands, vi.sky_ratios, b)[0]
-        halves = [np.tensordot(cs, vi.sun_halves[h], 1) for h in range(2)]
-        sky_halves = [np.tensordot(ck, vi.sky_halves[h][:3].sum(0), 1) for h in range(2)]
-        both = [halves[h] + np.tensordot(ck, np.tensordot(sky_w, vi.sky_halves[h], 1), 1) for h in range(2)]
-        for part, (x, y) in (("sun", halves), ("sky", sky_halves), ("sun_and_sky", both)):
+        for part, (x, y) in composed_halves(vi, sun_bands, sky_bands, sky_w, b).items():
             m = (x + y) / 2
             se = standard_error(x, y)
             ok = foot & (m > 0)
