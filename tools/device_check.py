@@ -3,7 +3,9 @@ where a CUDA GPU works): one all-orders precompute node (σ_t 0.5, g 0.85, twice
 kernels), the main job's whole precompute (cumulus, ``kite`` view), and the day frame of ``day_to_sunset`` at
 640×480 and 1920×1080 (raw: no denoiser). Writes ``<out>/device_check.json`` and the raw 640×480 frame
 (``frame640.npy``, float16) to compare with a CPU render of the same frame. With ``--budget-scales 1,4,8,16``
-instead: the precompute's noise figures and time against the photon budget (:func:`budget_study`).
+instead: the precompute's noise figures and time against the photon budget (:func:`budget_study`). ``--parts``
+picks some of the three (e.g. ``--parts precompute``, with an overlay such as ``config/gpu.yaml`` merged into the
+config JSON).
 
 A GPU machine may lack the workflow's tools (Snakemake, jsonschema, OIDN): validate the config where they are
 installed and carry the JSON along:
@@ -38,6 +40,9 @@ def main():
                     "with the collision budgets times each of these comma-separated factors, then the whole "
                     "precompute at the largest factor if it fits in --budget-s seconds")
     ap.add_argument("--budget-s", type=float, default=300.0)
+    ap.add_argument("--parts", default="node,precompute,frames",
+                    help="comma-separated, in this order: node (one node twice), precompute (the main job's whole "
+                    "precompute), frames (the day frame at 640x480 and 1920x1080)")
     a = ap.parse_args()
     if a.dump_config:
         Path(a.dump_config).write_text(json.dumps(validated_config(), default=str))
@@ -70,8 +75,9 @@ def main():
     if a.budget_scales:
         return budget_study(res, dump, vol, camera, sun, pre, st, [float(x) for x in a.budget_scales.split(",")],
                             a.budget_s)
+    parts = set(a.parts.split(","))
     scene = Scene(vol, Lighting(np.asarray(sun, np.float64), skylight_dome(sun, pre.get("skylight"))), st)
-    for rep in range(2):
+    for rep in range(2 if "node" in parts else 0):
         t0 = time.perf_counter()
         vi = view_images(scene, camera, 0.5, 0.85, seed=0)
         res[f"node_s_{rep}"] = round(time.perf_counter() - t0, 2)
@@ -79,11 +85,15 @@ def main():
         res["node_sun_band_sums"] = [float(x) for x in vi.sun.sum((1, 2))]
         print(rep, res[f"node_s_{rep}"], vi.stats, flush=True)
         dump()
-    t0 = time.perf_counter()
-    tables = all_orders_precompute(vol, camera, sun, pre, st, pre["sigma_t"], pre["g"])
-    res["precompute_main_job_s"] = round(time.perf_counter() - t0, 1)
-    res["precompute_noise"] = tables.meta.get("pixel_relative_standard_error")
-    dump()
+    if "precompute" in parts:
+        t0 = time.perf_counter()
+        tables = all_orders_precompute(vol, camera, sun, pre, st, pre["sigma_t"], pre["g"])
+        res["precompute_main_job_s"] = round(time.perf_counter() - t0, 1)
+        res["precompute_noise"] = tables.meta.get("pixel_relative_standard_error")
+        res["precompute_budget_scale"] = tables.meta.get("budget_scale")
+        dump()
+    if "frames" not in parts:
+        return
     day = cfg["shots"]["day_to_sunset"]
     cvol, _ = build_volume(cfg["volumes"]["cumulonimbus"], "cumulonimbus")
     cam = dict(day["keyframes"][0]["camera"])
