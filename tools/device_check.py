@@ -4,8 +4,8 @@ kernels), the main job's whole precompute (cumulus, ``kite`` view), and the day 
 640×480 and 1920×1080 (raw: no denoiser). Writes ``<out>/device_check.json`` and the raw 640×480 frame
 (``frame640.npy``, float16) to compare with a CPU render of the same frame. With ``--budget-scales 1,4,8,16``
 instead: the precompute's noise figures and time against the photon budget (:func:`budget_study`). ``--parts``
-picks some of the three (e.g. ``--parts precompute``, with an overlay such as ``config/gpu.yaml`` merged into the
-config JSON).
+picks some of the three (e.g. ``--parts precompute``); ``--dump-config cfg.json --overlay config/gpu.yaml`` merges an
+overlay into the config JSON.
 
 A GPU machine may lack the workflow's tools (Snakemake, jsonschema, OIDN): validate the config where they are
 installed and carry the JSON along:
@@ -25,15 +25,27 @@ sys.path.insert(0, str(ROOT / "src"))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
 
-def validated_config() -> dict:
+PARTS = ("node", "precompute", "frames")
+
+
+def validated_config(overlays=()) -> dict:
+    """The main job's config with the ``overlays`` (paths, e.g. ``config/gpu.yaml``) merged the way Snakemake
+    merges several ``--configfile`` arguments, validated."""
+    from snakemake.utils import update_config
+
     from natscene.config import load_yaml_config, validate_config
     cfg = load_yaml_config(ROOT / "config" / "config.yaml")
-    return validate_config(cfg, ROOT / "workflow" / "schemas" / "config.schema.yaml", source="config/config.yaml")
+    for path in overlays:
+        update_config(cfg, load_yaml_config(Path(path)))
+    return validate_config(cfg, ROOT / "workflow" / "schemas" / "config.schema.yaml",
+                           source=" + ".join(["config/config.yaml", *map(str, overlays)]))
 
 
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--dump-config", help="write the validated main config as JSON and stop")
+    ap.add_argument("--overlay", action="append", default=[],
+                    help="with --dump-config: a config overlay merged onto the main job (repeatable)")
     ap.add_argument("--config-json", help="the validated main config (from --dump-config)")
     ap.add_argument("--out", default=str(ROOT / "results" / "benchmarks"))
     ap.add_argument("--budget-scales", help="instead: the noise and time of the nodes sigma_t 0.5 and 1 (g 0.85) "
@@ -44,8 +56,11 @@ def main():
                     help="comma-separated, in this order: node (one node twice), precompute (the main job's whole "
                     "precompute), frames (the day frame at 640x480 and 1920x1080)")
     a = ap.parse_args()
+    parts = set(a.parts.split(","))
+    if not parts <= set(PARTS):
+        ap.error(f"--parts: unknown {sorted(parts - set(PARTS))}; choose from {', '.join(PARTS)}")
     if a.dump_config:
-        Path(a.dump_config).write_text(json.dumps(validated_config(), default=str))
+        Path(a.dump_config).write_text(json.dumps(validated_config(a.overlay), default=str))
         return
     cfg = json.loads(Path(a.config_json).read_text()) if a.config_json else validated_config()
     out = Path(a.out)
@@ -75,9 +90,9 @@ def main():
     if a.budget_scales:
         return budget_study(res, dump, vol, camera, sun, pre, st, [float(x) for x in a.budget_scales.split(",")],
                             a.budget_s)
-    parts = set(a.parts.split(","))
-    scene = Scene(vol, Lighting(np.asarray(sun, np.float64), skylight_dome(sun, pre.get("skylight"))), st)
-    for rep in range(2 if "node" in parts else 0):
+    scene = (Scene(vol, Lighting(np.asarray(sun, np.float64), skylight_dome(sun, pre.get("skylight"))), st)
+             if "node" in parts else None)
+    for rep in range(2 if scene is not None else 0):
         t0 = time.perf_counter()
         vi = view_images(scene, camera, 0.5, 0.85, seed=0)
         res[f"node_s_{rep}"] = round(time.perf_counter() - t0, 2)
