@@ -26,7 +26,7 @@ def tables(H=240, W=320, K=3, Ng=10, Ns=11, seed=0):
 def baseline(tb, p, sky):
     out = []
     for i in range(len(p["L_in"])):
-        s, g = p["sigma_t"][i], p["g"][i]
+        s, g = p["extinction"][i], p["g"][i]
         si = min(int(s / 0.1), 9); fs = s / 0.1 - si
         gi = min(int(g / 0.1), 8); fg = g / 0.1 - gi
         lerp = lambda a: a[si] * (1 - fs) + a[si + 1] * fs  # noqa: E731
@@ -45,7 +45,7 @@ def dense_product(tb, p, sky):
     P, p = population(p)
     H, W = tb.t_c.shape
     K, Ng, Ns = tb.multiple.shape[:3]
-    ws, wg = lerp_weights(tb.sigma_t, p["sigma_t"]), lerp_weights(tb.g, p["g"])
+    ws, wg = lerp_weights(tb.extinction, p["extinction"]), lerp_weights(tb.g, p["g"])
     s_sun, s_amb, T = (ws @ a.reshape(Ns, -1) for a in (tb.s_sun, tb.s_amb, tb.transmittance))
     g = p["g"].astype(np.float32)[:, None]
     d = 1 + g * g - 2 * g * tb.cos_theta.reshape(1, -1)
@@ -62,7 +62,7 @@ def main():
     tb = tables()
     r = np.random.default_rng(1)
     P = 20
-    p = dict(c_in=r.random((P, 3)), L_in=r.random(P) * 10, g=r.random(P) * 0.9, sigma_t=r.random(P),
+    p = dict(c_in=r.random((P, 3)), L_in=r.random(P) * 10, g=r.random(P) * 0.9, extinction=r.random(P),
              beta=r.random(P), L_amb=r.random(P), kappa_a=np.zeros((P, 3)))
     sky = r.random((240, 320, 3), dtype=np.float32)
     kappas = np.round(np.arange(11) * 0.1, 2)

@@ -33,7 +33,7 @@ def synthetic(w=320, h=240):
     from natscene.scatter.tables import Tables
 
     t = sphere_tables(w, h)
-    tab = Tables(t.sigma_t, t.g, t.orders, t.s_sun, t.s_amb, t.transmittance, t.multiple, t.t_c, t.cos_theta,
+    tab = Tables(t.extinction, t.g, t.orders, t.s_sun, t.s_amb, t.transmittance, t.multiple, t.t_c, t.cos_theta,
                  t.footprint)
     sky = sky_image(w, h)
     photo = sky.copy()

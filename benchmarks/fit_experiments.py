@@ -84,7 +84,7 @@ def main():
         vol = load_volume(results / "volumes" / "cumulus")
         cam = Camera.from_view(view, resolution=tab.t_c.shape[::-1])
         sun = sun_direction(view["sun"]["azimuth"], view["sun"]["elevation"])
-        true = {"L_in": 4.0, "g": 0.55, "sigma_t": 0.45, "beta": 0.9, "L_amb": 0.25}
+        true = {"L_in": 4.0, "g": 0.55, "extinction": 0.09, "beta": 0.9, "L_amb": 0.25}
         kappa = np.array([0.2, 0.3, 0.4])
         t0 = time.perf_counter()
         target = render(vol, cam, sun, {"c_in": c_in, **true, "kappa_a": kappa}, sky, orders=4,

@@ -82,7 +82,7 @@ def case_configs(tmp: Path) -> dict[str, tuple[dict, list[str]]]:
     c["volumes"]["tiny"].update(resolution=[256, 192, 256], blobs=40)
     c["views"]["tiny"]["resolution"] = [320, 240]
     c["shots"]["tiny"].update(resolution=[320, 240], frames=1, keyframes=[{"at": 0, "fit": None,
-        "params": {"L_in": 3.0, "g": 0.8, "sigma_t": 0.5, "beta": 0.99, "L_amb": 0.1, "c_in": [1, 1, 1],
+        "params": {"L_in": 3.0, "g": 0.8, "extinction": 0.3, "beta": 0.99, "L_amb": 0.1, "c_in": [1, 1, 1],
                    "kappa_a": 0.1}, "sun": {"azimuth": 130, "elevation": 35},
         "camera": {"position": [0.0, 1.7, -3000.0], "look_at": [0.0, 2200.0, 0.0], "fov": 36}}])
     c["tiles"]["grass"].update(sizes=[[4096, 4096]])
@@ -109,7 +109,7 @@ def case_configs(tmp: Path) -> dict[str, tuple[dict, list[str]]]:
     c["shots"]["tiny"].update(resolution=[640, 480], frames=1,
                               keyframes=[c["shots"]["tiny"]["keyframes"][1] | {"at": 0}])
     c["shots"]["tiny"]["keyframes"][0]["fit"] = None
-    c["shots"]["tiny"]["keyframes"][0]["params"] = {"L_in": 3.0, "g": 0.8, "sigma_t": 0.5, "beta": 0.99,
+    c["shots"]["tiny"]["keyframes"][0]["params"] = {"L_in": 3.0, "g": 0.8, "extinction": 0.3, "beta": 0.99,
                                                     "L_amb": 0.1, "c_in": [1, 1, 1], "kappa_a": 0.1}
     c["tiles"]["grass"]["sizes"] = [[2048, 2048]]
     c["composite"]["garden"]["ground"]["texture"] = {"product": "tiles/grass/synth_2048x2048.exr"}

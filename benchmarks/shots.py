@@ -41,7 +41,7 @@ from natscene.variant import select_variant
 from natscene.volume.grid import load_volume
 
 # the kite fit of the main job (results/fit/kite/params.yaml when it exists: see _kite_params)
-PARAMS = {"L_in": 6.35, "g": 0.698, "sigma_t": 0.123, "beta": 0.9998, "L_amb": 0.0,
+PARAMS = {"L_in": 6.35, "g": 0.698, "extinction": 0.0243, "beta": 0.9998, "L_amb": 0.0,
           "kappa_a": [0.0, 0.1, 0.6], "c_in": [0.971, 1.002, 1.065]}
 
 

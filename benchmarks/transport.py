@@ -224,11 +224,11 @@ def main():
     pre = cfg["precompute"]
     products, _ = photo_products(cfg, camera.width, camera.height)
     result = {"volume": "cumulus", "view": "kite", "resolution": [camera.width, camera.height],
-              "grid": {"sigma_t": pre["sigma_t"], "g": pre["g"]}}
+              "grid": {"extinction": pre["extinction"], "g": pre["g"]}}
     for transport in TRANSPORTS:
         st = settings_from_config(pre)
         t0 = time.perf_counter()
-        tables = precompute(vol, camera, sun, sigmas=pre["sigma_t"], gs=pre["g"], n_m=pre["n_m"], spp=pre["spp"],
+        tables = precompute(vol, camera, sun, extinctions=pre["extinction"], gs=pre["g"], n_m=pre["n_m"], spp=pre["spp"],
                             seed=pre["seed"], step_voxels=pre["step_voxels"], supersample=pre["supersample"],
                             transport=transport, all_orders=st, skylight=pre.get("skylight"), log=print)
         t_pre = time.perf_counter() - t0
@@ -241,7 +241,7 @@ def main():
         t_fit = time.perf_counter() - t0
         per_iter = t_fit / (fit["result"].iterations + 1)
         chosen = fit["params"]["chosen"]
-        p = {k: chosen[k] for k in ("L_in", "g", "sigma_t", "beta", "L_amb", "c_in", "kappa_a")}
+        p = {k: chosen[k] for k in ("L_in", "g", "extinction", "beta", "L_amb", "c_in", "kappa_a")}
         p.update({k: chosen[k] for k in ("sky_scale", "ground_albedo") if k in chosen})
         kw = dict(transport=transport)
         if transport == "dobashi":
@@ -260,7 +260,7 @@ def main():
             "ga_iteration_ms": round(1000 * per_iter, 2), "frame_s": round(t_frame, 2),
             "fit_speedup_over_direct_rendering": round(20 * t_frame / per_iter, 1),
             "fit_O": round(fit["result"].best.objective, 4),
-            "fitted": {k: chosen[k] for k in ("L_in", "g", "sigma_t", "beta", "L_amb")},
+            "fitted": {k: chosen[k] for k in ("L_in", "g", "extinction", "beta", "L_amb")},
             "table_megabytes": round(tables.nbytes() / 1e6, 1),
             "volpath": volpath_agreement(transport),
         }

@@ -2,7 +2,7 @@
 results/benchmarks/transport_experiments.json and contact sheets under results/benchmarks/.
 
 1. Dobashi Fig. 5, harder: the target is a Mitsuba 3 ``volpath`` render of every scattering order of the main
-   job's cumulus (kite view, g 0.85, beta 0.999, known L_in and sigma_t) over the kite photo's sky, not our own
+   job's cumulus (kite view, g 0.85, beta 0.999, known L_in and extinction) over the kite photo's sky, not our own
    renderer. Both models fit it (``--seeds`` GA runs each, n_max = 100): O and the recovered parameters
    against the true ones.
 2. The kite photo: both models, ``--seeds`` GA runs each; O and the fitted parameters; the contact sheets of
@@ -27,7 +27,7 @@ from _common import ROOT, write_result
 
 import natscene  # noqa: F401
 
-TRUE = {"L_in": 4.0, "g": 0.85, "sigma_t": 0.5, "beta": 0.999}
+TRUE = {"L_in": 4.0, "g": 0.85, "extinction": 0.1, "beta": 0.999}   # extinction in 1/m
 
 
 def stats(x):
@@ -45,7 +45,7 @@ def tables_for(transport, cfg, vol, camera, sun):
     except Exception:  # noqa: BLE001 - not there yet: compute and keep them
         pre = cfg["precompute"]
         st = settings_from_config(pre)
-        tb = precompute(vol, camera, sun, sigmas=pre["sigma_t"], gs=pre["g"], n_m=pre["n_m"], spp=pre["spp"],
+        tb = precompute(vol, camera, sun, extinctions=pre["extinction"], gs=pre["g"], n_m=pre["n_m"], spp=pre["spp"],
                         seed=pre["seed"], transport=transport, all_orders=st, skylight=pre.get("skylight"), log=print)
         d.mkdir(parents=True, exist_ok=True)
         save_tables(d, tb)
@@ -60,10 +60,10 @@ def mitsuba_target(vol, camera, sun, c_in, sky, spp):
     if cache.exists():
         z = np.load(cache)
         return z["cloud"], z["T"]
-    cloud = sum(render_reference(vol, camera, sun, TRUE["sigma_t"], TRUE["g"], TRUE["beta"], orders=100_000,
+    cloud = sum(render_reference(vol, camera, sun, TRUE["extinction"] / vol.extinction_scale, TRUE["g"], TRUE["beta"], orders=100_000,
                                  spp=spp // 4, seed=k, irradiance=TRUE["L_in"] * np.asarray(c_in))
                 for k in range(4)) / 4
-    T = render_transmittance(vol, camera, TRUE["sigma_t"], spp=64, seed=1)
+    T = render_transmittance(vol, camera, TRUE["extinction"] / vol.extinction_scale, spp=64, seed=1)
     cache.parent.mkdir(parents=True, exist_ok=True)
     np.savez(cache, cloud=cloud, T=T)
     return cloud, T

@@ -24,8 +24,8 @@ def main(snakemake, log):
     detail = (f"n_m={cfg['n_m']}, {cfg['spp']} spp" if transport == "dobashi" else
               f"{settings.sun_collisions:.3g} + {settings.sky_collisions:.3g} photon collisions per node")
     log.info(f"precompute {snakemake.wildcards.volume} x {snakemake.wildcards.view}: {camera.width}x{camera.height}, "
-             f"{len(cfg['sigma_t'])} sigma_t x {len(cfg['g'])} g, transport {transport}, {detail} ({variant})")
-    tables = precompute(volume, camera, sun, sigmas=cfg["sigma_t"], gs=cfg["g"], n_m=cfg["n_m"], spp=cfg["spp"],
+             f"{len(cfg['extinction'])} extinctions x {len(cfg['g'])} g, transport {transport}, {detail} ({variant})")
+    tables = precompute(volume, camera, sun, extinctions=cfg["extinction"], gs=cfg["g"], n_m=cfg["n_m"], spp=cfg["spp"],
                         seed=cfg["seed"], step_voxels=cfg["step_voxels"], supersample=cfg["supersample"],
                         rho_threshold=cfg["rho_threshold"], batch_spp=cfg["batch_spp"], log=log.info,
                         transport=transport, all_orders=settings, skylight=cfg.get("skylight"))

@@ -36,10 +36,10 @@ def main(snakemake, log):
         table = read_table(snakemake.input.table)
         mie = {"solution_mie": load_solution(snakemake.input.mie), "solution_hg": load_solution(snakemake.input.hg),
                "table_mie": table, "table_hg": hg_table(float(table.g[1])), "render": dict(par.mie_render)}
-        sig = float(state["params"]["sigma_t"])
+        ext = float(state["params"]["extinction"])
         log.info(f"mie_blend: sun {par.mie_sun} (frame az/el {state['sun']['azimuth']:.2f}/"
                  f"{state['sun']['elevation']:.2f}), droplet table {snakemake.input.table}, solver sigma_t "
-                 f"{par.mie_sigma_t:g} (frame {sig:.3g})")
+                 f"{par.mie_sigma_t:g} (frame extinction {ext:.3g} /m)")
     r = shot["render"]
     w, h = shot["resolution"]
     log.info(f"frame {state['frame']} ({w}x{h}, {r['spp']} spp, orders {r['orders']}, {variant}, "

@@ -125,9 +125,14 @@ CASES = [
     ("mie sun below horizon", _set(["mie", "demo", "sun"], {"azimuth": 10, "elevation": 0}), "mie.demo.sun.elevation",
      "below the horizon"),
     # value relations
-    ("sigma_t above 1", _set(["precompute", "sigma_t"], [0.0, 0.5, 1.5]), "precompute.sigma_t", "above 1"),
-    ("sigma_t not increasing", _set(["precompute", "sigma_t"], [0.0, 0.5, 0.3]), "precompute.sigma_t",
+    ("extinction not increasing", _set(["precompute", "extinction"], [0.0, 0.5, 0.3]), "precompute.extinction",
      "strictly increasing"),
+    ("fit extinction not covered by the nodes", _set(["fit", "ranges"], {"extinction": [0.02, 0.5]}),
+     "fit.ranges.extinction", "precompute.extinction"),
+    ("fit extinction unphysical", _set(["fit", "ranges"], {"extinction": [0.00001, 0.3]}), "fit.ranges.extinction",
+     "physical range"),
+    ("fit extinction above 1 /m", _set(["fit", "ranges"], {"extinction": [0.02, 3.0]}), "fit.ranges.extinction",
+     "physical range"),
     ("g not increasing", _set(["precompute", "g"], [0.5, 0.5]), "precompute.g", "strictly increasing"),
 ]
 

@@ -12,7 +12,7 @@ import cv2
 import numpy as np
 import pytest
 
-from natscene.fit.genetic import PARAMS, Codec, run_ga, two_point_crossover, mutate, roulette
+from natscene.fit.genetic import PARAMS, Codec, UnitBox, run_ga, two_point_crossover, mutate, roulette
 from natscene.fit.gradient import gradient_descent
 from natscene.fit.kappa import KappaSearch, kappa_grid
 from natscene.fit.objective import Levels, channel_distance, histograms, objective
@@ -39,7 +39,7 @@ def sphere_tables(w=96, h=72):
     orders = [2, 3, 4]
     mult = np.stack([np.stack([(1 - trans) * (0.35 ** o) * (1 + 0.5 * gg) for gg in g]) for o in orders])
     return types.SimpleNamespace(
-        sigma_t=s, g=g, orders=orders, s_sun=s_sun.astype(np.float32), s_amb=s_amb.astype(np.float32),
+        extinction=s, g=g, orders=orders, s_sun=s_sun.astype(np.float32), s_amb=s_amb.astype(np.float32),
         transmittance=trans.astype(np.float32), multiple=mult.astype(np.float32),
         t_c=(0.9 + 0.2 * yy / h).astype(np.float32), cos_theta=np.full((h, w), 0.3, np.float32),
         footprint=(chord > 0).astype(np.float32))
@@ -52,12 +52,12 @@ def _interp(grid, x):
 
 
 def ref_compose_cloud(t, params, sky):
-    """Eq. 4 (L_s + L_m + L_b) with linear interpolation in sigma_t and g, transcribed directly."""
+    """Eq. 4 (L_s + L_m + L_b) with linear interpolation in the extinction and g, transcribed directly."""
     out = []
     c_in = np.asarray(params["c_in"], np.float64)
     for p in range(len(params["L_in"])):
         L_in, g, st, beta, L_amb = (float(params[k][p]) for k in PARAMS)
-        i, a = _interp(t.sigma_t, st)
+        i, a = _interp(t.extinction, st)
         j, b = _interp(t.g, g)
         lerp = lambda arr: (1 - a) * arr[i] + a * arr[i + 1]  # noqa: E731
         s_sun, s_amb, tr = lerp(t.s_sun), lerp(t.s_amb), lerp(t.transmittance)
@@ -98,7 +98,10 @@ def make_problem(target_values, target_kappa, metric="difference", size=(96, 72)
                       apply_atmosphere=ref_apply_atmosphere), target
 
 
-TRUE = [3.0, 0.45, 0.5, 0.9, 0.3]  # L_in, g, sigma_t, beta, L_amb
+TRUE = [3.0, 0.45, 0.5, 0.9, 0.3]  # L_in, g, extinction, beta, L_amb
+# the GA's ranges in these tests (the defaults are the physical ones): the extinction on its log scale
+LINEAR = {"L_in": (0.0, 10.0), "g": (0.0, 1.0), "extinction": (0.01, 1.0), "beta": (0.0, 1.0), "L_amb": (0.0, 1.0)}
+FIT_RANGES = LINEAR
 
 
 # ------------------------------------------------------------------------------------------ objective
@@ -201,12 +204,30 @@ def test_bad_inputs_are_named():
 
 # ------------------------------------------------------------------------------------------ GA
 def test_codec_quantises_32_bits_and_round_trips():
-    codec = Codec([(0, 10), (0, 1)], bits=32)
+    codec = Codec(UnitBox(("L_in", "g"), {"L_in": (0, 10), "g": (0, 1)}), bits=32)
     assert codec.length == 64
     v = np.array([[0.0, 1.0], [10.0, 0.0], [3.14159, 0.271828]])
     back = codec.decode(codec.encode(v))
     assert np.allclose(back, v, atol=10 / 2 ** 32 * 1.01)
     assert np.array_equal(codec.decode(np.ones((1, 64), np.uint8)), [[10.0, 1.0]])
+
+
+def test_extinction_is_searched_on_a_log_scale():
+    """The extinction (1/m) spans two decades: equal steps of the code are equal ratios, each decade of
+    [0.002, 0.3] gets the same share of the codes, and the ends decode exactly."""
+    box = UnitBox(("g", "extinction"), {"g": (0.0, 1.0), "extinction": (0.002, 0.3)})
+    u = np.array([[0.0, 0.0], [0.5, 0.5], [1.0, 1.0]])
+    v = box.from_unit(u)
+    assert np.allclose(v[:, 1], [0.002, np.sqrt(0.002 * 0.3), 0.3], rtol=1e-12)
+    assert np.allclose(v[:, 0], [0.0, 0.5, 1.0])
+    assert np.allclose(box.to_unit(v), u, atol=1e-12)
+    codec = Codec(box, bits=8)
+    k = np.arange(256)[:, None]
+    genes = ((k >> np.arange(7, -1, -1)) & 1).astype(np.uint8)
+    ext = codec.decode(np.concatenate([np.zeros_like(genes), genes], 1))[:, 1]
+    assert np.allclose(ext[1:] / ext[:-1], (0.3 / 0.002) ** (1 / 255), rtol=1e-9)
+    with pytest.raises(ValueError, match="above 0"):
+        UnitBox(("extinction",), {"extinction": (0.0, 0.3)})
 
 
 def test_two_point_crossover_swaps_one_segment():
@@ -233,8 +254,8 @@ def test_ga_minimises_analytic_function_with_elitism_and_is_repeatable():
     def f(v):
         return np.abs((v - target) / span).sum(1), np.zeros((len(v), 3))
 
-    r1 = run_ga(f, seed=11, epsilon_o=0, n_suc=0, n_max=100)
-    r2 = run_ga(f, seed=11, epsilon_o=0, n_suc=0, n_max=100)
+    r1 = run_ga(f, LINEAR, seed=11, epsilon_o=0, n_suc=0, n_max=100)
+    r2 = run_ga(f, LINEAR, seed=11, epsilon_o=0, n_suc=0, n_max=100)
     assert np.all(np.diff(r1.best_history) <= 0)  # elitism: best never gets worse
     assert r1.best.objective < 0.25 * r1.best_history[0]
     assert r1.evaluations == 20 + 100 * 19
@@ -260,22 +281,22 @@ def test_gradient_descent_finds_smooth_minimum():
     def f(v):
         return (((v - target) / [10, 1, 1, 1, 1]) ** 2).sum(1), np.zeros((len(v), 3))
 
-    r = gradient_descent(f, seed=3, max_iter=200)
+    r = gradient_descent(f, LINEAR, seed=3, max_iter=200)
     assert r.best.objective < 1e-3
 
 
 # ------------------------------------------------------------------------------------------ fit
 def test_ga_recovers_synthetic_target_image():
     prob, target = make_problem(TRUE, [0.2, 0.2, 0.2])
-    r = run_ga(prob, seed=0, epsilon_o=0, n_suc=0, n_max=100)
+    r = run_ga(prob, FIT_RANGES, seed=0, epsilon_o=0, n_suc=0, n_max=100)
     assert r.best.objective <= 0.1
     best = prob.render(np.array([[r.best.values[p] for p in PARAMS]]), r.best.kappa[None])[0]
     m = prob.footprint
     assert np.abs(best[m] - target[m]).mean() < 0.05 * target[m].mean()
     # the same seed gives the same result
     prob2, _ = make_problem(TRUE, [0.2, 0.2, 0.2])
-    ra = run_ga(prob, seed=1, epsilon_o=0, n_suc=0, n_max=10)
-    rb = run_ga(prob2, seed=1, epsilon_o=0, n_suc=0, n_max=10)
+    ra = run_ga(prob, FIT_RANGES, seed=1, epsilon_o=0, n_suc=0, n_max=10)
+    rb = run_ga(prob2, FIT_RANGES, seed=1, epsilon_o=0, n_suc=0, n_max=10)
     assert rb.best.values == ra.best.values and np.array_equal(rb.best.kappa, ra.best.kappa)
     assert np.array_equal(ra.best_history, rb.best_history)
 
@@ -295,7 +316,7 @@ def test_real_compose_on_restricted_tables_equals_full_image():
     compose = pytest.importorskip("natscene.scatter.compose")
     tables_mod = pytest.importorskip("natscene.scatter.tables")
     t = sphere_tables()
-    tab = tables_mod.Tables(t.sigma_t, t.g, t.orders, t.s_sun, t.s_amb, t.transmittance, t.multiple, t.t_c,
+    tab = tables_mod.Tables(t.extinction, t.g, t.orders, t.s_sun, t.s_amb, t.transmittance, t.multiple, t.t_c,
                             t.cos_theta, t.footprint)
     sky = sky_image()
     prob = FitProblem(tab, sky, sky, tab.footprint > 0.5, C_IN)  # the real compose_cloud / apply_atmosphere

@@ -38,10 +38,10 @@ from helpers import sphere_volume
 
 ROOT = Path(__file__).resolve().parents[1]
 SMOKE = load_yaml_config(ROOT / "config" / "smoke.yaml")
-DAY = {"L_in": 6.0, "g": 0.6, "sigma_t": 0.3, "beta": 0.97, "L_amb": 0.3, "kappa_a": [0.1, 0.1, 0.2],
+DAY = {"L_in": 6.0, "g": 0.6, "extinction": 0.18, "beta": 0.97, "L_amb": 0.3, "kappa_a": [0.1, 0.1, 0.2],
        "c_in": [1.0, 0.98, 0.95]}
 # the smoke cloud's parameters as the GA fits them to the kite photo (results/smoke fit/tiny, rounded)
-FIT = {"L_in": 9.9, "g": 0.03, "sigma_t": 0.146, "beta": 0.966, "L_amb": 0.57, "kappa_a": [0.5, 0.6, 0.8],
+FIT = {"L_in": 9.9, "g": 0.03, "extinction": 0.088, "beta": 0.966, "L_amb": 0.57, "kappa_a": [0.5, 0.6, 0.8],
        "c_in": [0.97, 1.0, 1.06]}
 SUN = np.array([0.63, 0.57, -0.53]) / np.linalg.norm([0.63, 0.57, -0.53])
 # the smoke config's tiny cumulus (a 2 km box whose base is at 1500 m; the cloud fills x 400-1400 m, y 1850-2250 m
@@ -88,7 +88,7 @@ def test_features_of_a_sphere():
     row = alpha[20]
     right = int(len(row) - 1 - np.argmax(row[::-1] > 0.05))
     assert normal[20, right, 0] < -0.5 * np.linalg.norm(normal[20, right])
-    f = frame_features(vol, cam, {"sigma_t": sigma, "beta": 0.9, "c_in": [2.0, 1.0, 0.5]},
+    f = frame_features(vol, cam, {"extinction": sigma * vol.extinction_scale, "beta": 0.9, "c_in": [2.0, 1.0, 0.5]},
                        sky=np.full((41, 41, 3), 0.3, np.float32), supersample=2)
     assert f["albedo"].min() >= 0 and f["albedo"].max() <= 1 and np.abs(f["normal"]).max() <= 1
     a = f["opacity"][20, 20]

@@ -24,9 +24,9 @@ from natscene.sky.daylight import preetham_Yxy, preetham_rgb, zenith_Yxy
 
 ROOT = Path(__file__).resolve().parents[1]
 
-DAY = {"L_in": 4.0, "g": 0.6, "sigma_t": 0.5, "beta": 0.9, "L_amb": 0.3, "kappa_a": [0.1, 0.2, 0.3],
+DAY = {"L_in": 4.0, "g": 0.6, "extinction": 0.05, "beta": 0.9, "L_amb": 0.3, "kappa_a": [0.1, 0.2, 0.3],
        "c_in": [1.0, 1.0, 1.0]}
-DUSK = {"L_in": 1.0, "g": 0.8, "sigma_t": 0.3, "beta": 0.7, "L_amb": 0.1, "kappa_a": 0.5,
+DUSK = {"L_in": 1.0, "g": 0.8, "extinction": 0.03, "beta": 0.7, "L_amb": 0.1, "kappa_a": 0.5,
         "c_in": [1.45, 0.92, 0.48]}
 CAM0 = {"position": [0.0, 0.25, -2.4], "look_at": [0.0, 0.3, 0.0], "fov": 36}
 CAM1 = {"position": [0.4, 0.2, -2.2], "look_at": [0.1, 0.3, 0.0], "fov": 40}
@@ -58,7 +58,7 @@ def test_frame_at_keyframe_has_exactly_its_parameters():
     cfg = _two_keyframes()
     for frame, kf, p in ((0, cfg["shots"]["s"]["keyframes"][0], DAY), (8, cfg["shots"]["s"]["keyframes"][1], DUSK)):
         st = frame_state(frame, _keys(cfg, frame))
-        for name in ("L_in", "g", "sigma_t", "beta", "L_amb"):
+        for name in ("L_in", "g", "extinction", "beta", "L_amb"):
             assert st["params"][name] == p[name]
         assert st["params"]["c_in"] == list(map(float, p["c_in"]))
         assert st["params"]["kappa_a"] == list(np.broadcast_to(np.float64(p["kappa_a"]), 3))

@@ -94,4 +94,4 @@ def test_bad_noise_target():
                     (AllOrdersSettings(noise_target=(0.03,)), "noise_target"),
                     (AllOrdersSettings(max_budget_scale=0.5), "max_budget_scale")):
         with pytest.raises(InputError, match=f"precompute.all_orders.{key}"):
-            precompute(vol, CAM, SUN, sigmas=[0.5], gs=[0.5], all_orders=st)
+            precompute(vol, CAM, SUN, extinctions=[15.0], gs=[0.5], all_orders=st)

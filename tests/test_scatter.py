@@ -26,7 +26,10 @@ SUN = np.array([0.5, 0.6, 0.3]) / np.linalg.norm([0.5, 0.6, 0.3])
 CAM = Camera((0.0, 0.25, -2.4), (0.0, 0.28, 0.0), fov=30, width=32, height=24)
 
 
-def blob_volume(scale=40.0):
+K = 40.0   # the blob's extinction_scale: extinction [1/m of the unit box] = sigma_t * K
+
+
+def blob_volume(scale=K):
     nx, ny, nz = 24, 16, 24
     lo, hi = placement((nx, ny, nz))
     z, y, x = np.meshgrid(np.linspace(-1, 1, nz), np.linspace(0, 1, ny), np.linspace(-1, 1, nx), indexing="ij")
@@ -45,14 +48,14 @@ def vol():
 
 @pytest.fixture(scope="module")
 def tables(vol, tmp_path_factory):
-    tb = precompute(vol, CAM, SUN, sigmas=[0.0, 0.5, 1.0], gs=[0.0, 0.4, 0.8], n_m=4, spp=4096, seed=1, transport="dobashi")
+    tb = precompute(vol, CAM, SUN, extinctions=[0.0, 0.5 * K, 1.0 * K], gs=[0.0, 0.4, 0.8], n_m=4, spp=4096, seed=1, transport="dobashi")
     d = tmp_path_factory.mktemp("pre")
     save_tables(d, tb)
     return tb, d
 
 
 def params(sig, g, beta, L_amb=0.0, L_in=1.0, kappa=0.0):
-    return dict(c_in=[1.0, 1.0, 1.0], L_in=L_in, g=g, sigma_t=sig, beta=beta, L_amb=L_amb, kappa_a=[kappa] * 3)
+    return dict(c_in=[1.0, 1.0, 1.0], L_in=L_in, g=g, extinction=sig * K, beta=beta, L_amb=L_amb, kappa_a=[kappa] * 3)
 
 
 # ------------------------------------------------------------------------------ closed forms
@@ -103,7 +106,7 @@ def test_transmittance_matches_volpath(vol):
 
 # ------------------------------------------------------------------------------ Mitsuba volpath
 def test_single_and_order2_match_volpath(vol):
-    tb = precompute(vol, CAM, SUN, sigmas=[0.5], gs=[0.5], n_m=2, spp=4096, seed=3, with_error=False,
+    tb = precompute(vol, CAM, SUN, extinctions=[0.5 * K], gs=[0.5], n_m=2, spp=4096, seed=3, with_error=False,
                     transport="dobashi")
     sky = np.zeros((CAM.height, CAM.width, 3), np.float32)
     cloud = (tb.footprint > 0) & (tb.transmittance[0] < 0.95)
@@ -122,7 +125,7 @@ def test_compose_matches_volpath_four_orders(tables, vol, sig, g, beta):
     sky = np.zeros((CAM.height, CAM.width, 3), np.float32)
     img = compose(tb, params(sig, g, beta), sky)[0, ..., 0]
     ref = render_reference(vol, CAM, SUN, sig, g, beta, orders=4, spp=8192, seed=5)[..., 0]
-    i = list(tb.sigma_t).index(sig)
+    i = list(tb.extinction).index(sig * K)
     cloud = (tb.footprint > 0) & (tb.transmittance[i] < 0.95)
     err = rel_l1(img, ref, cloud)
     bias = abs(img[cloud].sum() - ref[cloud].sum()) / ref[cloud].sum()
@@ -143,7 +146,7 @@ def test_g08_meets_three_percent_with_stronger_reference(vol):
     single-scattering march's 2x2 sub-rays (supersample=4) then leave a 2.6 % per-pixel box-filter error
     against volpath's order 1 (measured; 1.1 % with 4x4), so this test marches 4x4 sub-rays per pixel."""
     cam = Camera(CAM.position, CAM.look_at, fov=CAM.fov, width=16, height=12)
-    tb = precompute(vol, cam, SUN, sigmas=[0.0, 0.5], gs=[0.0, 0.4, 0.8], n_m=4, spp=32768, seed=2, transport="dobashi",
+    tb = precompute(vol, cam, SUN, extinctions=[0.0, 0.5 * K], gs=[0.0, 0.4, 0.8], n_m=4, spp=32768, seed=2, transport="dobashi",
                     supersample=16, with_error=False)
     img = compose(tb, params(0.5, 0.8, 0.95), np.zeros((12, 16, 3), np.float32))[0, ..., 0]
     ref = render_reference(vol, cam, SUN, 0.5, 0.8, 0.95, orders=4, spp=32768, seed=7)[..., 0]
@@ -178,13 +181,13 @@ def test_compose_at_grid_point_equals_tables(tables):
     H, W = tb.t_c.shape
     sky = np.zeros((H, W, 3), np.float32)
     si, gi = 2, 1
-    img = compose_cloud(tb, params(tb.sigma_t[si], tb.g[gi], 1.0), sky)[0, ..., 1]
+    img = compose_cloud(tb, params(tb.extinction[si] / K, tb.g[gi], 1.0), sky)[0, ..., 1]
     want = hg(tb.cos_theta, tb.g[gi]) * tb.s_sun[si] + tb.multiple[:, gi, si].sum(0)
     np.testing.assert_allclose(img, want, rtol=1e-4, atol=1e-9)
-    amb = compose_cloud(tb, params(tb.sigma_t[si], 0.0, 0.5, L_amb=1.0, L_in=0.0), sky)[0, ..., 0]
+    amb = compose_cloud(tb, params(tb.extinction[si] / K, 0.0, 0.5, L_amb=1.0, L_in=0.0), sky)[0, ..., 0]
     np.testing.assert_allclose(amb, tb.s_amb[si], rtol=1e-4, atol=1e-9)
     sky1 = np.ones((H, W, 3), np.float32)
-    bg = compose_cloud(tb, params(tb.sigma_t[si], 0.0, 0.5, L_in=0.0), sky1)[0, ..., 2]
+    bg = compose_cloud(tb, params(tb.extinction[si] / K, 0.0, 0.5, L_in=0.0), sky1)[0, ..., 2]
     np.testing.assert_allclose(bg, tb.transmittance[si], rtol=1e-4)
 
 
@@ -192,7 +195,7 @@ def test_population_and_interpolation(tables):
     tb, _ = tables
     H, W = tb.t_c.shape
     sky = np.full((H, W, 3), 0.2, np.float32)
-    P = dict(c_in=[[1, 0.9, 0.8], [0.7, 0.8, 1.0]], L_in=[2.0, 3.0], g=[0.2, 0.6], sigma_t=[0.25, 0.75],
+    P = dict(c_in=[[1, 0.9, 0.8], [0.7, 0.8, 1.0]], L_in=[2.0, 3.0], g=[0.2, 0.6], extinction=[0.25 * K, 0.75 * K],
              beta=[0.9, 0.99], L_amb=[0.1, 0.0], kappa_a=[[0.1, 0.2, 0.3], [0, 0, 0]])
     both = compose(tb, P, sky)
     assert both.shape == (2, H, W, 3) and both.dtype == np.float32
@@ -247,6 +250,6 @@ def test_bad_input(tables):
     with pytest.raises(InputError):
         compose(tb, params(0.5, 0.5, 0.9), np.zeros((5, 5, 3)))
     with pytest.raises(InputError):
-        precompute(blob_volume(), CAM, SUN, sigmas=[0.5, 0.2])
+        precompute(blob_volume(), CAM, SUN, extinctions=[0.5, 0.2])
     with pytest.raises(InputError):
         make_medium(Volume(np.zeros((4, 4, 4), np.float32), np.zeros(3), np.ones(3), 1.0))

@@ -39,7 +39,10 @@ SETTINGS = AllOrdersSettings(sun_collisions=12_000_000, sky_collisions=200_000, 
                              camera_lobe=0.6)
 
 
-def blob_volume(scale=80.0, n=(48, 32, 48)):
+K = 80.0   # the blob's extinction_scale: extinction [1/m of the unit box] = sigma_t * K
+
+
+def blob_volume(scale=K, n=(48, 32, 48)):
     """A smooth procedural cloud (an ellipsoidal heap, density falling to 0 at its edge) in a unit box;
     at sigma_t = 1 the optical depth through its middle is about 40."""
     nx, ny, nz = n
@@ -67,7 +70,7 @@ def vol():
 
 @pytest.fixture(scope="module")
 def tables(vol, tmp_path_factory):
-    tb = precompute(vol, CAM, SUN, sigmas=[0.0, *SIGMAS], gs=list(GS), seed=1, all_orders=SETTINGS)
+    tb = precompute(vol, CAM, SUN, extinctions=[0.0, *(s * K for s in SIGMAS)], gs=list(GS), seed=1, all_orders=SETTINGS)
     d = tmp_path_factory.mktemp("pre")
     save_tables(d, tb)
     return load_tables(d)
@@ -91,7 +94,7 @@ def test_stored_references_match_a_fresh_volpath_run(vol, references, s, g, b):
 
 
 def _params(s, g, b):
-    return dict(c_in=[1.0, 1.0, 1.0], L_in=1.0, g=g, sigma_t=s, beta=b, kappa_a=[0.0] * 3, **NOSKY)
+    return dict(c_in=[1.0, 1.0, 1.0], L_in=1.0, g=g, extinction=s * K, beta=b, kappa_a=[0.0] * 3, **NOSKY)
 
 
 def _ratios(ours, ref, foot, label):
@@ -182,7 +185,7 @@ def test_slab_reflectance_transmittance_match_long_volpath(g):
         cam = _slab_camera(np.cos(np.radians(30)), above)
         ref = sum(render_reference(vol, cam, sun, 1.0, g, beta, orders=100_000, spp=4096, seed=k)
                   for k in range(2))[..., 0].mean() / 2
-        p = dict(c_in=[1.0] * 3, L_in=1.0, g=g, sigma_t=1.0, beta=beta, kappa_a=[0.0] * 3)
+        p = dict(c_in=[1.0] * 3, L_in=1.0, g=g, extinction=vol.extinction_scale, beta=beta, kappa_a=[0.0] * 3)
         ours = np.mean([render(vol, cam, sun, p, np.zeros(3, np.float32), seed=seed, skylight=False,
                                sun_collisions=16_000_000)[..., 0].mean() for seed in range(4)])
         print(f"slab g={g} {'reflected' if above else 'transmitted'}: ours {ours:.5f} volpath {ref:.5f}")
@@ -197,7 +200,7 @@ def test_energy_conservation_slab():
     sun = np.array([0.0, 1.0, 0.0])
     x, wq = np.polynomial.legendre.leggauss(6)
     mus, wts = (x + 1) / 2, wq / 2
-    p = dict(c_in=[1.0] * 3, L_in=1.0, g=0.5, sigma_t=1.0, beta=1.0, kappa_a=[0.0] * 3)
+    p = dict(c_in=[1.0] * 3, L_in=1.0, g=0.5, extinction=vol.extinction_scale, beta=1.0, kappa_a=[0.0] * 3)
     flux = {}
     for above in (True, False):
         L = [render(vol, _slab_camera(mu, above, res=8), sun, p, np.zeros(3, np.float32), seed=3,
@@ -318,7 +321,7 @@ def test_standard_error_of_two_halves_reads_a_known_noise():
 def test_sky_dome_lights_the_shadow_side(vol):
     """The skylight brightens the cloud where the sun does not reach: with the dome on, the darkest cloud
     pixels gain light, and a dome with zero radiance gives exactly the sun-only image."""
-    p = dict(c_in=[1.0] * 3, L_in=3.0, g=0.85, sigma_t=0.5, beta=0.99, kappa_a=[0.0] * 3)
+    p = dict(c_in=[1.0] * 3, L_in=3.0, g=0.85, extinction=0.5 * K, beta=0.99, kappa_a=[0.0] * 3)
     sky = np.full(3, 0.3, np.float32)
     dark = render(vol, CAM, SUN, p, sky, seed=1, skylight=False, sun_collisions=1_000_000)
     zero = render(vol, CAM, SUN, p, sky, seed=1, dome=Dome(np.zeros((4, 8, 3)), np.zeros(3)),
@@ -334,16 +337,16 @@ def test_sky_dome_lights_the_shadow_side(vol):
 
 def test_bad_transport_settings(vol):
     with pytest.raises(InputError, match="precompute.transport"):
-        precompute(vol, CAM, SUN, sigmas=[0.5], gs=[0.5], transport="bouthors")
+        precompute(vol, CAM, SUN, extinctions=[0.5 * K], gs=[0.5], transport="bouthors")
     with pytest.raises(InputError, match="precompute.skylight.model"):
-        precompute(vol, CAM, SUN, sigmas=[0.5], gs=[0.5], skylight={"model": "hosek"},
+        precompute(vol, CAM, SUN, extinctions=[0.5 * K], gs=[0.5], skylight={"model": "hosek"},
                    all_orders=AllOrdersSettings(sun_collisions=10_000, sky_collisions=10_000))
     with pytest.raises(InputError, match="shots.<name>.render.transport"):
         render(vol, CAM, SUN, _params(0.5, 0.5, 0.9), np.zeros(3), transport="bouthors")
     with pytest.raises(InputError, match="precompute.n_m"):
-        precompute(vol, CAM, SUN, sigmas=[0.5], gs=[0.5], n_m=0, transport="dobashi")
+        precompute(vol, CAM, SUN, extinctions=[0.5 * K], gs=[0.5], n_m=0, transport="dobashi")
     with pytest.raises(InputError, match="precompute.spp"):
-        precompute(vol, CAM, SUN, sigmas=[0.5], gs=[0.5], spp=0, transport="dobashi")
+        precompute(vol, CAM, SUN, extinctions=[0.5 * K], gs=[0.5], spp=0, transport="dobashi")
 
 
 def test_all_orders_compose_is_the_explicit_sum_over_nodes_and_bands():
@@ -356,7 +359,7 @@ def test_all_orders_compose_is_the_explicit_sum_over_nodes_and_bands():
     H, W, Ns, Ng = 6, 5, 4, 3
     sb, kb = SUN_BANDS, ((1, 1), (2, 8), (9, None))
     sig, gs = np.array([0.1, 0.2, 0.5, 1.0]), np.array([0.0, 0.5, 0.85])
-    t = Tables(sigma_t=sig, g=gs, orders=[], s_sun=rng.random((Ns, H, W), np.float32),
+    t = Tables(extinction=sig, g=gs, orders=[], s_sun=rng.random((Ns, H, W), np.float32),
                s_amb=np.zeros((Ns, H, W), np.float32), transmittance=rng.random((Ns, H, W), np.float32),
                multiple=np.zeros((0, Ng, Ns, H, W), np.float32), t_c=rng.random((H, W), np.float32),
                cos_theta=rng.uniform(-1, 1, (H, W)).astype(np.float32), footprint=np.ones((H, W), np.float32),
@@ -366,7 +369,7 @@ def test_all_orders_compose_is_the_explicit_sum_over_nodes_and_bands():
                sky_ms=rng.random((4, len(kb), Ng, Ns, H, W), np.float32),
                sun_ratios=rng.uniform(0.5, 0.99, (Ng, Ns, len(sb))), sky_ratios=rng.uniform(0.5, 0.99, (Ng, Ns, len(kb))))
     P = 7
-    p = {"L_in": rng.uniform(1, 8, P), "g": rng.uniform(-0.2, 0.95, P), "sigma_t": rng.uniform(0.05, 1.2, P),
+    p = {"L_in": rng.uniform(1, 8, P), "g": rng.uniform(-0.2, 0.95, P), "extinction": rng.uniform(0.05, 1.2, P),
          "beta": rng.uniform(0.9, 1.0, P), "L_amb": np.zeros(P), "c_in": rng.uniform(0.5, 1.5, (P, 3)),
          "sky_scale": rng.uniform(0.5, 2, (P, 3)), "ground_albedo": rng.uniform(0, 0.5, (P, 3))}
     sky = rng.random((H, W, 3), np.float32)
@@ -380,7 +383,7 @@ def test_all_orders_compose_is_the_explicit_sum_over_nodes_and_bands():
         g, b = p["g"][j], p["beta"][j]
         phase = (1 - g * g) / (4 * np.pi * (1 + g * g - 2 * g * t.cos_theta) ** 1.5)
         G = p["ground_albedo"][j] / np.pi * (p["L_in"][j] * p["c_in"][j] * 0.5 + p["sky_scale"][j] * [0.3, 0.4, 0.6])
-        for si, ws in bracket(sig, p["sigma_t"][j]):
+        for si, ws in bracket(sig, p["extinction"][j]):
             single = p["L_in"][j] * b * phase * t.s_sun[si]
             expect[j] += ws * (single[..., None] * p["c_in"][j] + t.transmittance[si][..., None] * sky)
             for gi, wg in bracket(gs, g):

@@ -48,7 +48,7 @@ def main():
                     help="with --dump-config: a config overlay merged onto the main job (repeatable)")
     ap.add_argument("--config-json", help="the validated main config (from --dump-config)")
     ap.add_argument("--out", default=str(ROOT / "results" / "benchmarks"))
-    ap.add_argument("--budget-scales", help="instead: the noise and time of the nodes sigma_t 0.5 and 1 (g 0.85) "
+    ap.add_argument("--budget-scales", help="instead: the noise and time of the nodes at extinction 0.1 and 0.2 /m (g 0.85) "
                     "with the collision budgets times each of these comma-separated factors, then the whole "
                     "precompute at the largest factor if it fits in --budget-s seconds")
     ap.add_argument("--budget-s", type=float, default=300.0)
@@ -102,7 +102,7 @@ def main():
         dump()
     if "precompute" in parts:
         t0 = time.perf_counter()
-        tables = all_orders_precompute(vol, camera, sun, pre, st, pre["sigma_t"], pre["g"])
+        tables = all_orders_precompute(vol, camera, sun, pre, st, pre["extinction"], pre["g"])
         res["precompute_main_job_s"] = round(time.perf_counter() - t0, 1)
         res["precompute_noise"] = tables.meta.get("pixel_relative_standard_error")
         res["precompute_budget_scale"] = tables.meta.get("budget_scale")
@@ -127,43 +127,43 @@ def main():
         dump()
 
 
-def all_orders_precompute(vol, camera, sun, pre, settings, sigmas, gs):
+def all_orders_precompute(vol, camera, sun, pre, settings, extinctions, gs):
     """The precompute of the validated ``precompute`` section ``pre`` with all-orders ``settings`` on a grid."""
     from natscene.scatter.tables import precompute
-    return precompute(vol, camera, sun, sigmas=sigmas, gs=gs, seed=pre["seed"], step_voxels=pre["step_voxels"],
+    return precompute(vol, camera, sun, extinctions=extinctions, gs=gs, seed=pre["seed"], step_voxels=pre["step_voxels"],
                       supersample=pre["supersample"], rho_threshold=pre["rho_threshold"], transport="all_orders",
                       all_orders=settings, skylight=pre.get("skylight"), log=print)
 
 
 def budget_study(res, dump, vol, camera, sun, pre, st, scales, budget_s):
     """Noise figures (the meta's ``pixel_relative_standard_error``) and time of the precompute on the nodes
-    (0.5, 0.85) and (1, 0.85) with the sun's and the sky's collision budgets (and photon caps) scaled; then the
+    (0.1 /m, 0.85) and (0.2 /m, 0.85) with the sun's and the sky's collision budgets (and photon caps) scaled; then the
     main job's whole grid at the largest scale when the two nodes' time, scaled to the grid, fits ``budget_s``."""
     import dataclasses
 
-    def run(scale, sigmas, gs):
+    def run(scale, extinctions, gs):
         scaled = dataclasses.replace(st, sun_collisions=int(st.sun_collisions * scale),
                                      sky_collisions=int(st.sky_collisions * scale),
                                      sun_photons_max=int(st.sun_photons_max * scale),
                                      sky_photons_max=int(st.sky_photons_max * scale))
         t0 = time.perf_counter()
-        meta = all_orders_precompute(vol, camera, sun, pre, scaled, sigmas, gs).meta
+        meta = all_orders_precompute(vol, camera, sun, pre, scaled, extinctions, gs).meta
         return (round(time.perf_counter() - t0, 1), {k: [round(v["median"], 4), round(v["p95"], 4)]
                                                       for k, v in meta["pixel_relative_standard_error"].items()},
                 meta["photons"])
 
-    run(0.05, [0.0, 0.5], [0.85])                         # compiles the kernels
+    run(0.05, [0.0, 0.1], [0.85])                         # compiles the kernels
     for scale in scales:
-        s, noise, photons = run(scale, [0.0, 0.5, 1.0], [0.85])
+        s, noise, photons = run(scale, [0.0, 0.1, 0.2], [0.85])
         res[f"nodes_x{scale:g}"] = {"s": s, "noise": noise, "photons": photons}
         print(scale, s, noise, flush=True)
         dump()
     top = max(scales)
-    nodes = sum(1 for x in pre["sigma_t"] if x > 0) * len(pre["g"])
+    nodes = sum(1 for x in pre["extinction"] if x > 0) * len(pre["g"])
     estimate = res[f"nodes_x{top:g}"]["s"] / 2 * nodes
     res["grid_estimate_s"] = round(estimate, 1)
     if estimate <= budget_s:
-        s, noise, photons = run(top, pre["sigma_t"], pre["g"])
+        s, noise, photons = run(top, pre["extinction"], pre["g"])
         res[f"grid_x{top:g}"] = {"s": s, "noise": noise, "photons": photons}
     dump()
 

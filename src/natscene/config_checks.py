@@ -15,7 +15,8 @@ whole, so that no job starts on a config that would fail later with a raw except
   shot keyframes and composites without a shot; the sun above the horizon where a stage needs sunlight from
   above (views, i.e. precompute and fit; shot keyframes, whose Preetham sky is defined for a sun above the
   horizon; the sun of a composite without a shot; the Mie demo);
-- **value relations**: grids strictly increasing, the precompute's sigma_t within the fit's meaning [0, 1],
+- **value relations**: grids strictly increasing, the fit's extinction range (1/m) physical and covered by the
+  precompute's extinction nodes,
   keyframe frames inside their shot, a composite's frames inside its shot (or inside the shot whose frames a
   product background names).
 
@@ -209,16 +210,27 @@ def _check_precompute(p, config):
     for i, pair in enumerate(pre.get("pairs") or []):
         _ref(p, config, f"precompute.pairs[{i}].volume", pair.get("volume"), "volumes")
         _ref(p, config, f"precompute.pairs[{i}].view", pair.get("view"), "views")
-    if "sigma_t" in pre:
-        _increasing(p, "precompute.sigma_t", pre["sigma_t"])
-        big = [s for s in pre["sigma_t"] if s > 1]
-        if big:
-            p.add("precompute.sigma_t", f"values {big} are above 1: sigma_t is the fit's unitless extinction in "
-                                        f"[0, 1] (0 = clear, 1 = the volume's reference optical depth); for "
-                                        f"denser clouds raise volumes.<name>.extinction_scale or "
-                                        f"reference_optical_depth instead")
+    if "extinction" in pre:
+        _increasing(p, "precompute.extinction", pre["extinction"])
+    if config.get("keyframes"):
+        _check_fit_extinction(p, config)
     if "g" in pre:
         _increasing(p, "precompute.g", pre["g"])
+
+
+def _check_fit_extinction(p, config):
+    """fit.ranges.extinction in the physical range and covered by precompute.extinction (the fit's tables)."""
+    from natscene.errors import InputError
+    from natscene.fit.genetic import DEFAULT_RANGES
+    from natscene.fit.keyframe import check_extinction_range
+    from natscene.scatter.tables import DEFAULT_EXTINCTIONS
+    rng = ((config.get("fit") or {}).get("ranges") or {}).get("extinction", DEFAULT_RANGES["extinction"])
+    grid = (config.get("precompute") or {}).get("extinction", DEFAULT_EXTINCTIONS)
+    try:
+        check_extinction_range(rng, grid)
+    except InputError as e:
+        msg = str(e)
+        p.add("fit.ranges.extinction", msg.split("': ", 1)[-1] if msg.startswith("config key") else msg)
 
 
 def _check_keyframes(p, config):

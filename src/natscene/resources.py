@@ -36,7 +36,7 @@ MODEL: dict[str, dict[str, float]] = {  # bytes per unit / MB; n = measured jobs
     "composite": {"base": 323.9, "samples": 0 / MB, "texture_pixels": 173 / MB},  # n=4, max residual 115.3 MB
     "composite_reference": {"base": 373.6, "spectral_samples": 8.105 / MB, "texture_pixels": 0 / MB},  # n=3, max residual 0.5 MB
     "fit": {"base": 298.3, "pixels": 2275 / MB, "table_values": 0 / MB},  # n=2, max residual 0.0 MB
-    # all-orders tables (8 + 4x3 band images per node): one main-job run (kite, 320x240, 7 sigma_t x 5 g,
+    # all-orders tables (8 + 4x3 band images per node): one main-job run (kite, 320x240, 7 extinctions x 5 g,
     # 55.9 M table values): 1008 MB peak -> 9.7 bytes per value over base and pixels (the tables as read, their
     # pixel-compressed copy for the GA and the EXR reader's buffers)
     "fit_all_orders": {"base": 298.3, "pixels": 2275 / MB, "table_values": 9.72 / MB},  # n=1
@@ -49,7 +49,7 @@ MODEL: dict[str, dict[str, float]] = {  # bytes per unit / MB; n = measured jobs
     "pattern_sheet": {"base": 192.0, "pixels": 256 / MB},  # n=2, max residual 0.0 MB
     "pigment_maps": {"base": 165.6, "pixels": 725.4 / MB},  # n=4, max residual 4.0 MB
     "point_scatter": {"base": 227.1, "voxels": 67.19 / MB},  # n=8, max residual 4.6 MB
-    # all-orders transport: one main-job run (cumulus 160x112x160, 320x240, 7 sigma_t x 5 g, 8 + 4x3 bands):
+    # all-orders transport: one main-job run (cumulus 160x112x160, 320x240, 7 extinctions x 5 g, 8 + 4x3 bands):
     # 1655 MB peak, 55.9 M table values -> 22.5 bytes per value over base and voxels; with the noise target's
     # top-ups (up to 8x the photons) 1777 MB peak of the declared 2200 (fresh-clone run of 726a883)
     "precompute_all_orders": {"base": 365.9, "table_values": 22.5 / MB, "voxels": 12.15 / MB},  # n=1
@@ -130,10 +130,10 @@ def _pixels(res) -> int:
 
 
 def _table_values(config: dict, pixels: int) -> int:
-    """Float values of the precompute tables: 4 single-scattering/geometry images per sigma_t, plus per (g,
-    sigma_t) the n_m - 1 orders (dobashi) or the sun's 8 bands and the sky's 3 bands x 4 channels (all_orders)."""
+    """Float values of the precompute tables: 4 single-scattering/geometry images per extinction node, plus per
+    (g, extinction) the n_m - 1 orders (dobashi) or the sun's 8 bands and the sky's 3 bands x 4 channels (all_orders)."""
     pre = config.get("precompute") or {}
-    n_s = len(pre.get("sigma_t", [0] * 11))
+    n_s = len(pre.get("extinction", [0] * 9))
     n_g = len(pre.get("g", [0] * 10))
     if pre.get("transport", "all_orders") == "all_orders":
         ao = pre.get("all_orders") or {}

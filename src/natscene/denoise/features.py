@@ -210,9 +210,9 @@ def albedo_image(opacity: np.ndarray, beta: float, c_in, sky: np.ndarray | None 
 def frame_features(volume, camera, params: dict, sky=None, supersample: int = 2,
                    step_voxels: float = 1.0) -> dict:
     """All feature images of one frame: {opacity, coverage, albedo, normal} for the frame's parameter set
-    (``sigma_t``, ``beta``, ``c_in``) and sky (H, W, 3) (or None)."""
-    alpha, normal, cover = view_features(volume, camera, float(np.asarray(params["sigma_t"]).reshape(-1)[0]),
-                                         supersample, step_voxels)
+    (``extinction`` in 1/m, ``beta``, ``c_in``) and sky (H, W, 3) (or None)."""
+    sigma_t = float(np.asarray(params["extinction"]).reshape(-1)[0]) / float(volume.extinction_scale)
+    alpha, normal, cover = view_features(volume, camera, sigma_t, supersample, step_voxels)
     beta = float(np.asarray(params.get("beta", 1.0)).reshape(-1)[0])
     albedo = albedo_image(alpha, beta, params.get("c_in", (1.0, 1.0, 1.0)), sky)
     return {"opacity": alpha, "coverage": cover, "albedo": albedo, "normal": np.clip(normal, -1.0, 1.0)}

@@ -1,7 +1,8 @@
 """Genetic algorithm for the cloud parameters (Dobashi et al. 2012, §4.2 and §5; Goldberg 1989).
 
-Following Goldberg's simple GA as the paper does: each parameter (L_in, g, sigma_t, beta, L_amb) is
-quantised to ``bits`` = 32 bits over its range (value = lo + (hi - lo) * k / (2^bits - 1)) and the five
+Following Goldberg's simple GA as the paper does: each parameter (L_in, g, extinction, beta, L_amb) is
+quantised to ``bits`` = 32 bits over its range (value = lo + (hi - lo) * k / (2^bits - 1); the extinction in
+1/m, which spans two decades, on a log scale: value = lo (hi / lo)^(k / (2^bits - 1))) and the five
 bit strings are concatenated into one gene of 160 bits; the initial population of n = 20 individuals is
 random; fitness is ``1 / (O + 1)`` (maximum 1); parents are drawn by fitness-proportionate (roulette-wheel)
 selection (after Goldberg's linear fitness scaling with c_mult = 2, part of his simple GA, unless
@@ -24,15 +25,46 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-PARAMS = ("L_in", "g", "sigma_t", "beta", "L_amb")       # transport: dobashi (the paper's five)
-PARAMS_ALL_ORDERS = ("L_in", "g", "sigma_t", "beta")     # transport: all_orders (the skylight replaces L_amb)
+PARAMS = ("L_in", "g", "extinction", "beta", "L_amb")       # transport: dobashi (the paper's five)
+PARAMS_ALL_ORDERS = ("L_in", "g", "extinction", "beta")     # transport: all_orders (the skylight replaces L_amb)
+LOG_PARAMS = frozenset({"extinction"})                      # searched on a log scale (lo > 0)
 
 
 def fit_params(transport: str) -> tuple:
     """The GA's parameters for a transport model."""
     return PARAMS_ALL_ORDERS if transport == "all_orders" else PARAMS
-DEFAULT_RANGES = {"L_in": (0.0, 10.0), "g": (0.0, 1.0), "sigma_t": (0.0, 1.0), "beta": (0.0, 1.0),
+DEFAULT_RANGES = {"L_in": (0.0, 10.0), "g": (0.0, 1.0), "extinction": (0.002, 0.3), "beta": (0.9999, 1.0),
                   "L_amb": (0.0, 1.0)}
+
+
+class UnitBox:
+    """The map between parameter values (P, n) in ``names`` order and the unit box [0, 1]^n the searches
+    move in: linear over each range, logarithmic for :data:`LOG_PARAMS` (whose ``lo`` must be > 0)."""
+
+    def __init__(self, names: Sequence[str], ranges: dict):
+        self.names = tuple(names)
+        self.lo = np.array([ranges[p][0] for p in names], np.float64)
+        self.hi = np.array([ranges[p][1] for p in names], np.float64)
+        if np.any(self.hi < self.lo):
+            raise ValueError(f"empty parameter range: {list(zip(self.lo, self.hi))}")
+        self.log = np.array([p in LOG_PARAMS for p in names])
+        if np.any(self.log & (self.lo <= 0)):
+            bad = [p for p, lg, lo in zip(names, self.log, self.lo) if lg and lo <= 0]
+            raise ValueError(f"log-scaled parameters need a range above 0: {bad}")
+        self._a = np.where(self.log, np.log(np.where(self.log, self.lo, 1.0)), self.lo)
+        b = np.where(self.log, np.log(np.where(self.log, self.hi, 1.0)), self.hi)
+        self._span = b - self._a
+
+    def from_unit(self, u: np.ndarray) -> np.ndarray:
+        x = self._a + self._span * np.asarray(u, np.float64)
+        return np.where(self.log, np.exp(x), x)
+
+    def to_unit(self, values: np.ndarray) -> np.ndarray:
+        v = np.asarray(values, np.float64)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            x = np.where(self.log, np.log(np.maximum(v, np.where(self.log, self.lo, 1.0))), v)
+        span = np.where(self._span > 0, self._span, 1.0)
+        return np.clip((x - self._a) / span, 0.0, 1.0)
 
 
 @dataclass
@@ -59,15 +91,12 @@ class FitResult:
 class Codec:
     """Quantise parameter vectors to concatenated ``bits``-bit strings and back."""
 
-    def __init__(self, ranges: Sequence[tuple[float, float]], bits: int = 32):
+    def __init__(self, box: UnitBox, bits: int = 32):
         if not 1 <= bits <= 52:
             raise ValueError("bits must be in 1..52")
-        self.lo = np.array([r[0] for r in ranges], np.float64)
-        self.hi = np.array([r[1] for r in ranges], np.float64)
-        if np.any(self.hi < self.lo):
-            raise ValueError(f"empty parameter range: {list(zip(self.lo, self.hi))}")
+        self.box = box
         self.bits = bits
-        self.n_params = len(self.lo)
+        self.n_params = len(box.lo)
         self.length = bits * self.n_params
         self._weights = (2.0 ** np.arange(bits - 1, -1, -1)).astype(np.float64)  # MSB first
 
@@ -75,13 +104,12 @@ class Codec:
         """Bit strings (P, n_params * bits) uint8 -> parameter values (P, n_params)."""
         g = np.asarray(genes, np.float64).reshape(len(genes), self.n_params, self.bits)
         k = g @ self._weights
-        return self.lo + (self.hi - self.lo) * k / (2.0 ** self.bits - 1)
+        return self.box.from_unit(k / (2.0 ** self.bits - 1))
 
     def encode(self, values: np.ndarray) -> np.ndarray:
         """Parameter values (P, n_params) -> nearest bit strings (P, n_params * bits) uint8."""
         v = np.asarray(values, np.float64)
-        span = np.where(self.hi > self.lo, self.hi - self.lo, 1.0)
-        k = np.rint(np.clip((v - self.lo) / span, 0, 1) * (2.0 ** self.bits - 1)).astype(np.uint64)
+        k = np.rint(self.box.to_unit(v) * (2.0 ** self.bits - 1)).astype(np.uint64)
         shifts = np.arange(self.bits - 1, -1, -1, dtype=np.uint64)
         bits = (k[..., None] >> shifts) & np.uint64(1)
         return bits.reshape(len(v), -1).astype(np.uint8)
@@ -125,11 +153,13 @@ def mutate(genes: np.ndarray, rate: float, rng: np.random.Generator) -> np.ndarr
     return genes ^ flips.astype(np.uint8)
 
 
-def _distinct_top(values: np.ndarray, objective: np.ndarray, span: np.ndarray, k: int, tol: float) -> list[int]:
+def _distinct_top(units: np.ndarray, objective: np.ndarray, k: int, tol: float) -> list[int]:
+    """Indices of the best ``k`` sets that differ from each other by more than ``tol`` in some unit-box
+    coordinate (a fraction of the range; of the decades for a log-scaled parameter)."""
     order = np.argsort(objective, kind="stable")
     chosen: list[int] = []
     for i in order:
-        if any(np.all(np.abs(values[i] - values[j]) <= tol * span) for j in chosen):
+        if any(np.all(np.abs(units[i] - units[j]) <= tol) for j in chosen):
             continue
         chosen.append(int(i))
         if len(chosen) == k:
@@ -149,8 +179,7 @@ def run_ga(evaluate: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]],
     those criteria (e.g. to force n_max iterations as in §5.1).
     """
     ranges = {**DEFAULT_RANGES, **(ranges or {})}
-    codec = Codec([ranges[p] for p in names], bits)
-    span = np.where(codec.hi > codec.lo, codec.hi - codec.lo, 1.0)
+    codec = Codec(UnitBox(names, ranges), bits)
     if scaling not in ("linear", "none"):
         raise ValueError(f"scaling must be 'linear' or 'none', got {scaling!r}")
     if population < 2:
@@ -212,6 +241,6 @@ def run_ga(evaluate: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]],
 
     av, ao = np.concatenate(arch_v), np.concatenate(arch_o)
     ak, ait = np.concatenate(arch_k), np.concatenate(arch_it)
-    idx = _distinct_top(av, ao, span, top_k, distinct_tol)
+    idx = _distinct_top(codec.box.to_unit(av), ao, top_k, distinct_tol)
     ranked = [Candidate(dict(zip(names, av[i].tolist())), float(ao[i]), ak[i], int(ait[i])) for i in idx]
     return FitResult(ranked[0], ranked, np.array(best_hist), np.array(mean_hist), it, len(ao), reason, av, ao)

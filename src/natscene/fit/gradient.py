@@ -1,7 +1,8 @@
 """Gradient-descent baseline of Dobashi et al. 2012, §5.1 ("the descent gradient method", Snyman 2005).
 
 Steepest descent from a random start on the same five parameters and the same objective as the GA (the
-kappa_a line search included in every evaluation). Parameters are scaled to the unit box by their ranges;
+kappa_a line search included in every evaluation). Parameters are scaled to the unit box by their ranges
+(:class:`natscene.fit.genetic.UnitBox`: the extinction on a log scale);
 the gradient is estimated by central finite differences with step ``h`` (in unit-box coordinates, clipped
 at the box faces); the step along -grad/|grad| is chosen by a sampled line search over
 ``alpha = alpha0 * 2^-j`` (j = 0..n_alpha-1), taking the best point if it lowers O; the iterate is
@@ -16,7 +17,7 @@ from typing import Callable
 
 import numpy as np
 
-from natscene.fit.genetic import DEFAULT_RANGES, PARAMS, Candidate, FitResult
+from natscene.fit.genetic import DEFAULT_RANGES, PARAMS, Candidate, FitResult, UnitBox
 
 
 def gradient_descent(evaluate: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]], ranges: dict | None = None,
@@ -26,15 +27,13 @@ def gradient_descent(evaluate: Callable[[np.ndarray], tuple[np.ndarray, np.ndarr
                      names: tuple = PARAMS) -> FitResult:
     """Minimise O from a random (or given, in parameter units) start; returns a FitResult like the GA's."""
     ranges = {**DEFAULT_RANGES, **(ranges or {})}
-    lo = np.array([ranges[p][0] for p in names], np.float64)
-    hi = np.array([ranges[p][1] for p in names], np.float64)
-    span = np.where(hi > lo, hi - lo, 1.0)
+    box = UnitBox(names, ranges)
     rng = np.random.default_rng(seed)
     n = len(names)
-    u = rng.random(n) if start is None else np.clip((np.asarray(start, np.float64) - lo) / span, 0, 1)
+    u = rng.random(n) if start is None else box.to_unit(np.asarray(start, np.float64))
 
     def ev(us: np.ndarray):
-        o, k = evaluate(lo + np.clip(us, 0, 1) * span)
+        o, k = evaluate(box.from_unit(np.clip(us, 0, 1)))
         return np.asarray(o, np.float64), np.asarray(k)
 
     o, k = ev(u[None])
@@ -71,7 +70,7 @@ def gradient_descent(evaluate: Callable[[np.ndarray], tuple[np.ndarray, np.ndarr
         hist.append(cur_o)
         if progress:
             progress(it, cur_o, cur_o)
-    best = Candidate(dict(zip(names, (lo + u * span).tolist())), cur_o, cur_k, it)
+    best = Candidate(dict(zip(names, box.from_unit(u).tolist())), cur_o, cur_k, it)
     h_arr = np.array(hist)
     return FitResult(best, [best], h_arr, h_arr.copy(), it, evals, reason,
-                     (lo + u * span)[None], np.array([cur_o]))
+                     box.from_unit(u)[None], np.array([cur_o]))

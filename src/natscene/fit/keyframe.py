@@ -20,25 +20,52 @@ from natscene.errors import InputError
 
 
 def effective_ranges(settings: dict | FitSettings, tables, log=None) -> dict:
-    """The configured ranges, with g and sigma_t clipped to the tables' grids (no data outside them)."""
+    """The configured ranges: g clipped to the tables' g grid (no data outside it); the extinction (1/m) must lie
+    inside the precomputed extinction grid, else InputError naming both keys."""
     settings = settings if isinstance(settings, FitSettings) else fit_settings(settings)
     names = fit_params(getattr(tables, "transport", "dobashi"))
     ranges = {p: tuple(float(x) for x in settings.ranges.get(p, DEFAULT_RANGES[p])) for p in names}
     for p, (lo, hi) in ranges.items():
         if hi < lo:
             raise InputError(f"config key 'fit.ranges.{p}': max {hi} is below min {lo}")
-    for p, grid in (("g", tables.g), ("sigma_t", tables.sigma_t)):
-        lo, hi = ranges[p]
-        glo, ghi = float(np.min(grid)), float(np.max(grid))
-        if lo < glo or hi > ghi:
-            new = (max(lo, glo), min(hi, ghi))
-            if new[1] < new[0]:
-                raise InputError(f"config key 'fit.ranges.{p}': [{lo}, {hi}] lies outside the precomputed grid "
-                                 f"[{glo}, {ghi}]; widen the precompute grid or change the range")
-            if log:
-                log(f"fit.ranges.{p} [{lo:g}, {hi:g}] clipped to the precomputed grid [{new[0]:g}, {new[1]:g}]")
-            ranges[p] = new
+    check_extinction_range(ranges["extinction"], tables.extinction)
+    lo, hi = ranges["g"]
+    glo, ghi = float(np.min(tables.g)), float(np.max(tables.g))
+    if lo < glo or hi > ghi:
+        new = (max(lo, glo), min(hi, ghi))
+        if new[1] < new[0]:
+            raise InputError(f"config key 'fit.ranges.g': [{lo}, {hi}] lies outside the precomputed grid "
+                             f"[{glo}, {ghi}]; widen precompute.g or change the range")
+        if log:
+            log(f"fit.ranges.g [{lo:g}, {hi:g}] clipped to the precomputed grid [{new[0]:g}, {new[1]:g}]")
+        ranges["g"] = new
     return ranges
+
+
+def check_extinction_range(fit_range, grid) -> None:
+    """``fit.ranges.extinction`` (1/m, searched on a log scale) lies inside the physical range
+    (:data:`natscene.scatter.tables.EXTINCTION_RANGE`) and inside the precompute's extinction grid, else
+    InputError naming the config keys."""
+    from natscene.scatter.tables import EXTINCTION_RANGE
+    lo, hi = (float(x) for x in fit_range)
+    plo, phi = EXTINCTION_RANGE
+    if not plo <= lo <= hi <= phi:
+        raise InputError(f"config key 'fit.ranges.extinction': [{lo:g}, {hi:g}] /m must lie in the physical range "
+                         f"[{plo:g}, {phi:g}] /m (haze ~0.002, cumulus 0.02-0.15, a storm core ~0.3) with min <= max")
+    glo, ghi = float(np.min(grid)), float(np.max(grid))
+    if lo < glo or hi > ghi:
+        raise InputError(f"config key 'fit.ranges.extinction': [{lo:g}, {hi:g}] /m is not covered by the "
+                         f"precompute's nodes (config key 'precompute.extinction': [{glo:g}, {ghi:g}] /m); add "
+                         f"nodes or narrow the range")
+
+
+def optical_depths(extinction: float, columns: dict | None) -> dict:
+    """The optical depth through the cloud at ``extinction`` (1/m): the precompute's columns ∫ rho ds in metres
+    (meta ``column_m``: horizontal and vertical, mean / p95 / max over the rays that hit the cloud) times it."""
+    if not columns:
+        return {}
+    return {axis: {k: round(float(extinction) * float(v), 3) for k, v in stats.items()}
+            for axis, stats in columns.items()}
 
 
 def fit_keyframe(tables, photo, photo_cloud, sky, c_in, settings: dict | FitSettings, seed: int = 0,
@@ -121,4 +148,10 @@ def fit_keyframe(tables, photo, photo_cloud, sky, c_in, settings: dict | FitSett
         "ranges": {p: list(r) for p, r in ranges.items()},
         "pixels": {"synthetic_cloud": problem.n_pixels, "photo_cloud": int(np.asarray(photo_cloud).sum())},
     }
+    depth = optical_depths(chosen["extinction"], tables.meta.get("column_m"))
+    if depth:
+        params["optical_depth"] = depth
+        h = depth["horizontal"]
+        log(f"extinction {chosen['extinction']:.4g} /m: optical depth through the cloud, horizontal mean {h['mean']:.3g} "
+            f"(p95 {h['p95']:.3g}, max {h['max']:.3g}), vertical mean {depth['vertical']['mean']:.3g}")
     return {"result": result, "problem": problem, "ranges": ranges, "images": images, "params": params}

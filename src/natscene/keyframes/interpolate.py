@@ -2,7 +2,7 @@
 render the clouds between the key frames"; Fig. 13: "the parameters for the in-between images are linearly
 interpolated").
 
-- scalars (L_in, g, sigma_t, beta, L_amb) and colours (c_in, kappa_a per channel): linear, as in the paper;
+- scalars (L_in, g, extinction, beta, L_amb) and colours (c_in, kappa_a per channel): linear, as in the paper;
 - the sun direction: spherical linear interpolation (slerp) of the unit vectors toward the sun, so it stays
   unit length and sweeps the great circle between the two keyframes at constant angular speed;
 - the camera position / look-at point / field of view: linear (default) or a non-uniform Catmull-Rom spline

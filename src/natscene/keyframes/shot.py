@@ -18,7 +18,7 @@ from natscene.geometry import sun_direction
 from natscene.keyframes.interpolate import (catmull_rom, direction_to_sun_angles, ease, lerp, segment_t,
                                             slerp)
 
-PARAMS = ("L_in", "g", "sigma_t", "beta", "L_amb")  # scalars, interpolated linearly (L_amb: dobashi transport, 0 if absent)
+PARAMS = ("L_in", "g", "extinction", "beta", "L_amb")  # scalars, interpolated linearly (L_amb: dobashi transport, 0 if absent)
 COLOURS = ("c_in", "kappa_a")  # RGB triples, interpolated linearly per channel
 
 

@@ -1,11 +1,12 @@
 """Image composition from the precomputed tables (Dobashi 2012 Eqs. 3, 4, 5, 8, 9), vectorised over a
 whole GA population.
 
-For each parameter set (c_in, L_in, g, sigma_t, beta, L_amb, kappa_a) and pixel q:
+For each parameter set (c_in, L_in, g, e, beta, L_amb, kappa_a; e the extinction coefficient in 1/m, mu_t = e rho)
+and pixel q:
 
-    L_s  = c_in L_in beta p(θ_q, g) S_sun(q, sigma_t) + c_in L_amb S_amb(q, sigma_t)      (Eq. 5)
-    L_m  = c_in L_in Σ_{k=2..n_m} beta^k E_m^(k)(q, g, sigma_t)                           (Eq. 8)
-    L_b  = T(q, sigma_t) L_sky(q)                                                         (Eq. 9)
+    L_s  = c_in L_in beta p(θ_q, g) S_sun(q, e) + c_in L_amb S_amb(q, e)      (Eq. 5)
+    L_m  = c_in L_in Σ_{k=2..n_m} beta^k E_m^(k)(q, g, e)                           (Eq. 8)
+    L_b  = T(q, e) L_sky(q)                                                         (Eq. 9)
     L_c  = L_s + L_m + L_b                                                                (Eq. 4)
     L_cg = L_c e^{-kappa_a t_c} + (1 - e^{-kappa_a t_c}) L_sky                             (Eq. 3)
 
@@ -21,9 +22,9 @@ with every order of the sun's light in bands T_b^sun and every order of the skyl
 (:func:`natscene.scatter.skylight.calibration`), E_dome the dome's horizontal irradiance and G the radiance of
 a Lambertian ground of ``ground_albedo``. L_amb has no role there: the skylight replaces it.
 
-Linear interpolation of the tables in sigma_t and g (bilinear for the multiple scattering); values outside a
+Linear interpolation of the tables in e and g (bilinear for the multiple scattering); values outside a
 grid are clamped to its ends. The phase p(θ_q, g) is evaluated exactly (HG). Per individual, the interpolation is a
-gather of the 2 x 2 bracketing (g, sigma_t) slices and the orders a (K,) @ (K, N) product with the weights
+gather of the 2 x 2 bracketing (g, e) slices and the orders a (K,) @ (K, N) product with the weights
 L_in beta^k w_g w_s: O(P · 4K · N) work, nothing proportional to the grid sizes. The GA's fast path
 (``pixels=``) composes only the N pixels it needs from a pixel-compressed copy of the tables,
 (Ng, Ns, K, N) float32, built once per pixel set and cached on the tables object.
@@ -35,7 +36,7 @@ import numpy as np
 from natscene.errors import InputError
 from natscene.scatter.phase import INV_4PI
 
-PARAM_KEYS = ("c_in", "L_in", "g", "sigma_t", "beta", "L_amb", "kappa_a")
+PARAM_KEYS = ("c_in", "L_in", "g", "extinction", "beta", "L_amb", "kappa_a")
 DEFAULT_GROUND_ALBEDO = 0.2
 
 
@@ -114,10 +115,10 @@ def lerp_weights(grid, x) -> np.ndarray:
 
 def population(params: dict) -> tuple[int, dict]:
     """Broadcast the parameter dict to a population: (P, {key: array}) with c_in (P,3), kappa_a (P,3)."""
-    missing = [k for k in ("L_in", "g", "sigma_t", "beta") if k not in params]
+    missing = [k for k in ("L_in", "g", "extinction", "beta") if k not in params]
     if missing:
         raise InputError(f"compose: parameters {missing} missing (need {', '.join(PARAM_KEYS)})")
-    scal = {k: np.atleast_1d(np.asarray(params.get(k, 0.0), np.float64)) for k in ("L_in", "g", "sigma_t", "beta", "L_amb")}
+    scal = {k: np.atleast_1d(np.asarray(params.get(k, 0.0), np.float64)) for k in ("L_in", "g", "extinction", "beta", "L_amb")}
     c_in = np.asarray(params.get("c_in", (1.0, 1.0, 1.0)), np.float64)
     kap = np.asarray(params.get("kappa_a", 0.0), np.float64)
     sizes = [v.size for v in scal.values()] + [c_in.shape[0] if c_in.ndim == 2 else 1,
@@ -173,7 +174,7 @@ def _brackets(grid: np.ndarray, x) -> tuple[np.ndarray, np.ndarray]:
 class PixelTables:
     """The tables restricted to N pixels in a pixel-compressed layout for fast composition.
 
-    ``single`` (Ns, 3, N) = (S_sun, S_amb, T); ``multiple`` (Ng, Ns, K, N) so that the (g, sigma_t) bracket of
+    ``single`` (Ns, 3, N) = (S_sun, S_amb, T); ``multiple`` (Ng, Ns, K, N) so that the (g, e) bracket of
     one individual is two contiguous (2, K, N) slices; ``cos_theta``, ``t_c`` (N,); ``index`` (N,) the flat
     pixel indices into the H x W image.
     """
@@ -233,7 +234,7 @@ def _compose_numba(p, sig, gs, orders, arrays, cos_t, sky, P, N):
     ws = np.zeros((P, 2), np.float32)
     wm = np.zeros((P, 2, 2, max(K, 1)), np.float32)
     for j in range(P):
-        si, fs = _bracket(sig, p["sigma_t"][j])
+        si, fs = _bracket(sig, p["extinction"][j])
         gi, fg = _bracket(gs, p["g"][j])
         sidx[j] = (si, min(si + 1, sig.size - 1))
         gidx[j] = (gi, min(gi + 1, gs.size - 1))
@@ -327,15 +328,15 @@ def _pop3(params: dict, key: str, P: int, default) -> np.ndarray:
 
 
 def all_orders_weights(tables, p: dict, P: int):
-    """Per individual: the (sigma_t, g) brackets and the band weights of the all-orders composition.
+    """Per individual: the (e, g) brackets and the band weights of the all-orders composition.
 
     Returns sidx, gidx (P, 2), ws (P, 2), wsun (P, 2, 2, B) = w_g w_s L_in c_b(beta), wsky (P, 2, 2, B')
     = w_g w_s c'_b(beta), a (P, 3) the dome's calibration, G (P, 3) the ground radiance."""
     from natscene.scatter.bands import band_weights
-    sig = np.asarray(tables.sigma_t, np.float64)
+    sig = np.asarray(tables.extinction, np.float64)
     gs = np.asarray(tables.g, np.float64)
     sb, kb = tables.sun_bands, tables.sky_bands
-    si, fs = _brackets(sig, p["sigma_t"])
+    si, fs = _brackets(sig, p["extinction"])
     gi, fg = _brackets(gs, p["g"])
     sidx = np.stack([si, np.minimum(si + 1, sig.size - 1)], 1)
     gidx = np.stack([gi, np.minimum(gi + 1, gs.size - 1)], 1)
@@ -397,12 +398,12 @@ def compose_cloud(tables, params: dict, sky, pixels=None, backend: str = "auto")
     (N,): only those pixels, (P, N, 3) in index order (the GA's fast path: the tables are re-laid out once
     per pixel set as (Ng, Ns, K, N) and cached on ``tables``). ``sky``: (H, W, 3), or (N, 3) with ``pixels``.
 
-    Per individual the (sigma_t, g) bracket is a gather of at most 2 x 2 table slices and the orders a
+    Per individual the (e, g) bracket is a gather of at most 2 x 2 table slices and the orders a
     weighted sum with beta^k (a (K,) @ (K, N) product per slice): the work is O(P · 4K · N), independent of
     the grid sizes Ns, Ng. ``backend``: "auto" (a fused numba kernel when numba imports) or "numpy".
     """
     P, p = population(params)
-    sig = np.asarray(tables.sigma_t, np.float64)
+    sig = np.asarray(tables.extinction, np.float64)
     gs = np.asarray(tables.g, np.float64)
     orders = np.asarray(tables.orders, np.float64)
     K = orders.size
@@ -446,7 +447,7 @@ def compose_cloud(tables, params: dict, sky, pixels=None, backend: str = "auto")
     A = np.empty((P, N), np.float32)
     T = np.empty((P, N), np.float32)
     for j in range(P):
-        si, fs = _bracket(sig, p["sigma_t"][j])
+        si, fs = _bracket(sig, p["extinction"][j])
         gi, fg = _bracket(gs, p["g"][j])
         ws = [(si, 1.0 - fs)] + ([(si + 1, fs)] if fs > 0 else [])
         wg = [(gi, 1.0 - fg)] + ([(gi + 1, fg)] if fg > 0 else [])

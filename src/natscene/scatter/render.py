@@ -2,10 +2,12 @@
 (the keyframe frames), with the same transport as the precompute.
 
 Common to both transports: the sun optical-depth volume for this sun (:mod:`natscene.scatter.medium`) and
-the ray-marched S_sun, S_amb, T at the given sigma_t (:mod:`natscene.scatter.single`), then Eqs. 4 and 3.
+the ray-marched S_sun, S_amb, T at the given extinction in 1/m (``params["extinction"]``, mu_t = e rho; the
+tracers take the volume's unitless sigma_t = e / ``extinction_scale``) (:mod:`natscene.scatter.single`), then
+Eqs. 4 and 3.
 
 - ``transport="all_orders"`` (default): every order of the sun's light and of the skylight by photon
-  tracing into the in-scatter cache (:mod:`natscene.scatter.allorders`) at this one (sigma_t, g), composed
+  tracing into the in-scatter cache (:mod:`natscene.scatter.allorders`) at this one (extinction, g), composed
   as :func:`natscene.scatter.compose.compose` does: the bands weighted by their closed-form albedo weights,
   the sky dome (``dome``, or the Preetham sky of ``sky_settings`` for this sun, the same sky the frame shows
   behind the cloud) and a Lambertian ground of ``ground_albedo``; L_amb is not used.
@@ -72,7 +74,11 @@ def render(volume, camera, sun_dir, params: dict, sky, orders: int = 4, spp: int
         raise InputError(f"render: sky image has shape {sky.shape}, the camera renders {W}x{H}")
     if orders < 1:
         raise InputError(f"render: orders must be >= 1, got {orders}")
-    sigma, g, beta = float(p["sigma_t"][0]), float(p["g"][0]), float(p["beta"][0])
+    extinction, g, beta = float(p["extinction"][0]), float(p["g"][0]), float(p["beta"][0])
+    if not extinction >= 0.0:
+        raise InputError(f"render: extinction {extinction:g} /m is negative (a keyframe's or "
+                         f"shots.<name>.keyframes' extinction)")
+    sigma = extinction / float(volume.extinction_scale)          # the tracers' unitless sigma_t
     med = make_medium(volume, sun_dir)
     single = march_view(med, camera, [sigma], step_voxels=step_voxels, supersample=supersample,
                         rho_threshold=rho_threshold)

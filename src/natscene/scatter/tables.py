@@ -1,11 +1,12 @@
 """The precomputed intermediate images for one volume, camera and sun (Dobashi 2012 §4.3), for either
 transport model (``precompute.transport``).
 
-For a sigma_t grid (default 0, 0.1, ..., 1) and a g grid (default 0, 0.1, ..., 0.9: HG with g -> 1 is a
-delta lobe, 0.9 is the documented maximum), the tables hold, per pixel q:
+For a grid of the extinction coefficient e in 1/m (mu_t(x) = e rho(x), rho the volume's density; default 0 and
+0.002 ... 0.3 /m, two decades from haze to a storm cloud's core, about log-spaced) and a g grid (default 0, 0.1,
+..., 0.9: HG with g -> 1 is a delta lobe, 0.9 is the documented maximum), the tables hold, per pixel q:
 
 - ``s_sun``, ``s_amb`` (Ns, H, W): the two integrals of Eq. 5 (:mod:`natscene.scatter.single`);
-- ``transmittance`` (Ns, H, W): tau(x_v, x_b, sigma_t) of Eq. 9;
+- ``transmittance`` (Ns, H, W): tau(x_v, x_b, e) of Eq. 9;
 - ``t_c`` (H, W): distance from the camera to the cloud (first sample with rho >= ``rho_threshold``)
   divided by the camera-to-volume distance (camera to bbox centre); 0 where no cloud;
 - ``cos_theta`` (H, W): cosine of θ_q, the angle between the sun's propagation direction and the
@@ -19,13 +20,15 @@ and the multiple scattering of the chosen transport:
   every order >= 1 of the skylight for the dome's R, G, B distributions and a unit-radiance ground, both
   without the albedo, with the bands' geometric ratios (``sun_ratios``, ``sky_ratios``: (Ng, Ns, B)) that
   make beta compose in closed form (:mod:`natscene.scatter.bands`);
-- ``transport: dobashi`` (the paper): ``multiple`` (K, Ng, Ns, H, W), E_m^(k)(q, g, sigma_t) of Eq. 7 for k in
+- ``transport: dobashi`` (the paper): ``multiple`` (K, Ng, Ns, H, W), E_m^(k)(q, g, e) of Eq. 7 for k in
   ``orders`` = 2..n_m (:mod:`natscene.scatter.multiple`), plus the ambient term through ``s_amb``.
 
-On disk (``results/precompute/{volume}/{view}/``): ``single.exr`` (channels ``sun.s<σ>``, ``amb.s<σ>``),
-``transmittance.exr`` (``T.s<σ>``), ``geometry.exr`` (``t_c``, ``cos_theta``, ``footprint``), then
-``allorders.exr`` (``sun.b<i>.g<g>.s<σ>``, ``sky.<R|G|B|ground>.b<i>.g<g>.s<σ>``; half floats, each channel
-divided by its maximum, the maxima in the header) or ``multiple.exr`` (``k<k>.g<g>.s<σ>``, float32), and
+The tracers take the volume's unitless sigma_t = e / ``extinction_scale`` (mu_t = sigma_t k rho).
+
+On disk (``results/precompute/{volume}/{view}/``): ``single.exr`` (channels ``sun.e<e>``, ``amb.e<e>``),
+``transmittance.exr`` (``T.e<e>``), ``geometry.exr`` (``t_c``, ``cos_theta``, ``footprint``), then
+``allorders.exr`` (``sun.b<i>.g<g>.e<e>``, ``sky.<R|G|B|ground>.b<i>.g<g>.e<e>``; half floats, each channel
+divided by its maximum, the maxima in the header) or ``multiple.exr`` (``k<k>.g<g>.e<e>``, float32), and
 ``meta.yaml`` (grids, bands and ratios, the sky dome, sample counts, noise). No wall-clock time is written
 into any of them (timings go to the log): a rerun gives the same bytes.
 """
@@ -43,13 +46,16 @@ from natscene.io import read_exr, read_yaml, write_exr, write_yaml
 TRANSPORTS = ("all_orders", "dobashi")
 SKY_CHANNELS = ("R", "G", "B", "ground")
 
-DEFAULT_SIGMAS = tuple(np.round(np.arange(11) * 0.1, 6))
+DEFAULT_EXTINCTIONS = (0.0, 0.002, 0.005, 0.01, 0.02, 0.04, 0.08, 0.15, 0.3)   # 1/m
+# 1/m: the physical range of a configured node or fitted extinction (0 is allowed as a node); checked on the config
+# (natscene.config_checks), not here: a volume in other units (the tests' unit boxes) takes any extinction >= 0
+EXTINCTION_RANGE = (1e-4, 1.0)
 DEFAULT_GS = tuple(np.round(np.arange(10) * 0.1, 6))
 
 
 @dataclass
 class Tables:
-    sigma_t: np.ndarray          # (Ns,)
+    extinction: np.ndarray       # (Ns,) 1/m
     g: np.ndarray                # (Ng,)
     orders: list                 # e.g. [2, 3, 4]
     s_sun: np.ndarray            # (Ns, H, W)
@@ -95,6 +101,16 @@ def check_grid(values, name: str, lo: float, hi: float, hi_open: bool = False) -
     return v
 
 
+def cloud_columns(volume) -> dict:
+    """The volume's columns ∫ rho ds in metres along z (``horizontal``) and y (``vertical``): mean, p95, max over
+    the rays that hit the cloud (:func:`natscene.volume.grid.column_statistics`)."""
+    from natscene.volume.grid import column_statistics
+    d = np.asarray(volume.density)
+    vs = np.asarray(volume.voxel_size, np.float64)
+    return {"horizontal": column_statistics(d, float(vs[2]), axis=0),
+            "vertical": column_statistics(d, float(vs[1]), axis=1)}
+
+
 def reference_distance(camera, volume) -> float:
     """Camera-to-volume distance used to normalise t_c: camera position to the bbox centre."""
     c = (np.asarray(volume.bbox_min, np.float64) + np.asarray(volume.bbox_max, np.float64)) / 2
@@ -126,6 +142,7 @@ def _stats(values: list) -> dict | None:
 
 
 def _dobashi_multiple(med, camera, sigmas, gs, single, n_m, spp, seed, batch_spp, with_error, log):
+    # sigmas: the volume's unitless sigma_t of each node (e / extinction_scale)
     """E_m^(k) (K, Ng, Ns, H, W) by per-order path tracing (Eq. 7) and its noise figures."""
     from natscene.scatter.multiple import trace_orders
     from natscene.scatter.phase import hg
@@ -135,7 +152,7 @@ def _dobashi_multiple(med, camera, sigmas, gs, single, n_m, spp, seed, batch_spp
     multiple = np.zeros((len(orders), len(gs), len(sigmas), H, W), np.float32)
     single_cos = camera.ray_directions() @ (med.sun_dir / np.linalg.norm(med.sun_dir))
     foot = single["footprint"] > 0
-    # only pixels whose view rays meet any density can score (T < 1 at the largest sigma_t), dilated by
+    # only pixels whose view rays meet any density can score (T < 1 at the largest extinction), dilated by
     # one pixel for jittered rays at the silhouette; the others are exactly 0 and are not traced
     traced = np.flatnonzero(binary_dilation(single["T"][-1] < 1, iterations=1)) if sigmas[-1] > 0 else None
     rel_se = {k: [] for k in orders}
@@ -162,13 +179,13 @@ def _dobashi_multiple(med, camera, sigmas, gs, single, n_m, spp, seed, batch_spp
                 weighted[k].append((se[k - 1][:, foot][okL] / L[okL]).astype(np.float32))
             tot = np.sqrt((se[1:][:, :, foot] ** 2).sum(0))
             weighted_sum.append((tot[okL] / L[okL]).astype(np.float32))
-        log(f"multiple scattering sigma_t={s:g}: orders {orders[0]}..{n_m}, {len(gs)} g, {spp} spp "
+        log(f"multiple scattering extinction={s * med.scale:g}/m: orders {orders[0]}..{n_m}, {len(gs)} g, {spp} spp "
             f"in {time.perf_counter() - ts:.1f} s")
     meta = {"orders": orders, "n_m": int(n_m), "spp": int(spp)}
     if with_error and orders:
         meta["relative_standard_error"] = {f"k{k}": _stats(v) for k, v in rel_se.items()}
         # standard error of E^(k) divided by the pixel's composed radiance (beta = 1, no ambient), and of
-        # sum_k E^(k) (orders' errors combined in quadrature), over cloud pixels, all sigma_t > 0 and g
+        # sum_k E^(k) (orders' errors combined in quadrature), over cloud pixels, all extinctions > 0 and g
         meta["pixel_relative_standard_error"] = {**{f"k{k}": _stats(v) for k, v in weighted.items()},
                                                  "sum": _stats(weighted_sum)}
         meta["traced_pixels"] = int(H * W if traced is None else traced.size)
@@ -242,8 +259,9 @@ def _node_noise(vi, sun_bands, sky_bands, sky_w, foot, single_sun) -> dict:
 
 
 def _all_orders_multiple(volume, camera, sun_dir, sigmas, gs, settings, sky, seed, log, single):
-    """Band images of the sun's and the sky's light over the (g, sigma_t) grid, their ratios and noise
-    (``single``: the precompute's :func:`natscene.scatter.single.march_view` of the grid)."""
+    """Band images of the sun's and the sky's light over the (g, extinction) grid, their ratios and noise
+    (``sigmas``: the volume's unitless sigma_t of each node; ``single``: the precompute's
+    :func:`natscene.scatter.single.march_view` of the grid)."""
     from natscene.scatter.allorders import Lighting, Scene, view_images
     from natscene.scatter.skylight import irradiance
     from natscene.sky.daylight import preetham_rgb
@@ -287,7 +305,7 @@ def _all_orders_multiple(volume, camera, sun_dir, sigmas, gs, settings, sky, see
         for k, v in node_noise(vi).items():
             noise[k].append(v)
         el = time.perf_counter() - t0
-        log(f"all orders sigma_t={sigmas[i]:g} g={gs[j]:g}: {vi.stats.get('sun_photons', 0)} sun + "
+        log(f"all orders extinction={sigmas[i] * volume.extinction_scale:.4g}/m g={gs[j]:g}: {vi.stats.get('sun_photons', 0)} sun + "
             f"{vi.stats.get('sky_photons', 0)} sky photons (budget x{scales[-1]:.2f}; {n + 1}/{len(todo)}, {el:.0f} s, "
             f"about {el / (n + 1) * (len(todo) - n - 1):.0f} s left)")
     dirs = camera.ray_directions()
@@ -301,7 +319,7 @@ def _all_orders_multiple(volume, camera, sun_dir, sigmas, gs, settings, sky, see
                      "sun_elevation_sin": float(s[1] / np.linalg.norm(s))},
         "photons": counts, "truncated_light": float(truncated),
         # photons per node as a multiple of the collision budget's (noise_target tops the noisy nodes up),
-        # per node, sigma_t > 0 in order, g within each sigma_t
+        # per node, extinction > 0 in order, g within each extinction
         "budget_scale": [round(x, 3) for x in scales],
         "settings": {"sun_collisions": int(settings.sun_collisions), "sky_collisions": int(settings.sky_collisions),
                      "sun_photons_max": int(settings.sun_photons_max), "sky_photons_max": int(settings.sky_photons_max),
@@ -311,7 +329,7 @@ def _all_orders_multiple(volume, camera, sun_dir, sigmas, gs, settings, sky, see
                      "noise_target": [float(x) for x in settings.noise_target],
                      "max_budget_scale": float(settings.max_budget_scale)},
         # per-pixel standard error of the composed multiple-scattering term divided by the term, over the
-        # cloud pixels and every (g, sigma_t) node: the sun's (orders >= 2), the sky's (R+G+B, orders >= 1), the
+        # cloud pixels and every (g, extinction) node: the sun's (orders >= 2), the sky's (R+G+B, orders >= 1), the
         # two together (luminance, the sun's irradiance 1 and the dome as it lit the cloud); "pixel": the error of
         # the two together divided by the composed cloud pixel (single scattering included)
         "pixel_relative_standard_error": {k: _stats(v) for k, v in noise.items()},
@@ -319,11 +337,11 @@ def _all_orders_multiple(volume, camera, sun_dir, sigmas, gs, settings, sky, see
     return sun_ms, sky_ms, sun_r, sky_r, meta
 
 
-def precompute(volume, camera, sun_dir, sigmas=DEFAULT_SIGMAS, gs=DEFAULT_GS, n_m: int = 4, spp: int = 256,
+def precompute(volume, camera, sun_dir, extinctions=DEFAULT_EXTINCTIONS, gs=DEFAULT_GS, n_m: int = 4, spp: int = 256,
                seed: int = 0, step_voxels: float = 0.5, supersample: int = 4, rho_threshold: float = 0.01,
                batch_spp: int | None = None, with_error: bool = True, log=None, transport: str = "all_orders",
                all_orders=None, skylight: dict | None = None) -> Tables:
-    """All tables for one volume, camera and sun (see the module docstring)."""
+    """All tables for one volume, camera and sun (see the module docstring); ``extinctions`` in 1/m."""
     from natscene.scatter.allorders import AllOrdersSettings
     from natscene.scatter.medium import make_medium
     from natscene.scatter.single import march_view
@@ -331,7 +349,8 @@ def precompute(volume, camera, sun_dir, sigmas=DEFAULT_SIGMAS, gs=DEFAULT_GS, n_
     if transport not in TRANSPORTS:
         raise InputError(f"config key 'precompute.transport': unknown transport {transport!r} "
                          f"(one of {', '.join(TRANSPORTS)})")
-    sigmas = check_grid(sigmas, "sigma_t", 0.0, 1e6)
+    extinctions = check_grid(extinctions, "extinction", 0.0, np.inf)   # the physical range: config_checks
+    sigmas = extinctions / float(volume.extinction_scale)          # the tracers' unitless sigma_t
     gs = check_grid(gs, "g", -1.0, 1.0, hi_open=True)
     if n_m < 1:
         raise InputError(f"config key 'precompute.n_m': must be >= 1, got {n_m}")
@@ -344,16 +363,18 @@ def precompute(volume, camera, sun_dir, sigmas=DEFAULT_SIGMAS, gs=DEFAULT_GS, n_
     med = make_medium(volume, sun_dir)
     single = march_view(med, camera, sigmas, step_voxels=step_voxels, supersample=supersample,
                         rho_threshold=rho_threshold)
-    log(f"single scattering + transmittance marched for {len(sigmas)} sigma_t in {time.perf_counter() - t0:.1f} s")
+    log(f"single scattering + transmittance marched for {len(sigmas)} extinctions in {time.perf_counter() - t0:.1f} s")
     H, W = camera.height, camera.width
     t_c, cos_t, footprint = geometry_images(camera, volume, med.sun_dir, single["t_hit"])
-    meta = {"transport": transport, "sigma_t": sigmas.tolist(), "g": gs.tolist(), "seed": int(seed),
+    meta = {"transport": transport, "extinction": extinctions.tolist(), "g": gs.tolist(), "seed": int(seed),
             "step_voxels": float(step_voxels), "supersample": int(supersample),
             "rho_threshold": float(rho_threshold), "resolution": [W, H],
             "camera": {"position": list(camera.position), "look_at": list(camera.look_at), "up": list(camera.up),
                        "fov": camera.fov},
             "sun_dir": med.sun_dir.tolist(), "extinction_scale": float(volume.extinction_scale),
-            "reference_distance": reference_distance(camera, volume), "footprint_pixels": int(footprint.sum())}
+            "reference_distance": reference_distance(camera, volume), "footprint_pixels": int(footprint.sum()),
+            # ∫ rho ds through the cloud in metres (times an extinction in 1/m: its optical depth)
+            "column_m": cloud_columns(volume)}
     extra = {}
     if transport == "dobashi":
         orders, multiple, m = _dobashi_multiple(med, camera, sigmas, gs, single, n_m, spp, seed, batch_spp,
@@ -369,7 +390,7 @@ def precompute(volume, camera, sun_dir, sigmas=DEFAULT_SIGMAS, gs=DEFAULT_GS, n_
                  "sky_bands": tuple(settings.sky_bands), "sun_ms": sun_ms, "sky_ms": sky_ms,
                  "sun_ratios": sun_r, "sky_ratios": sky_r}
     log(f"precompute done in {time.perf_counter() - t0:.1f} s")
-    return Tables(sigmas, gs, orders, single["S_sun"], single["S_amb"], single["T"], multiple, t_c, cos_t,
+    return Tables(extinctions, gs, orders, single["S_sun"], single["S_amb"], single["T"], multiple, t_c, cos_t,
                   footprint, meta, **extra)
 
 
@@ -380,10 +401,10 @@ def table_files(transport: str) -> tuple[str, ...]:
 
 
 def _allorders_names(tables) -> list[str]:
-    sig = [_tag(s) for s in tables.sigma_t]
+    sig = [_tag(s) for s in tables.extinction]
     gt = [_tag(g) for g in tables.g]
-    names = [f"sun.b{b}.g{g}.s{s}" for b in range(len(tables.sun_bands)) for g in gt for s in sig]
-    names += [f"sky.{c}.b{b}.g{g}.s{s}" for c in SKY_CHANNELS for b in range(len(tables.sky_bands))
+    names = [f"sun.b{b}.g{g}.e{s}" for b in range(len(tables.sun_bands)) for g in gt for s in sig]
+    names += [f"sky.{c}.b{b}.g{g}.e{s}" for c in SKY_CHANNELS for b in range(len(tables.sky_bands))
               for g in gt for s in sig]
     return names
 
@@ -391,13 +412,13 @@ def _allorders_names(tables) -> list[str]:
 def save_tables(directory, tables: Tables, extra_meta: dict | None = None) -> dict:
     """Write the files of the precompute (:func:`table_files`); returns the meta written (with file sizes)."""
     d = Path(directory)
-    sig = [_tag(s) for s in tables.sigma_t]
+    sig = [_tag(s) for s in tables.extinction]
     gt = [_tag(g) for g in tables.g]
-    attrs = {"sigma_t": tables.sigma_t.tolist(), "g": tables.g.tolist(), "orders": list(tables.orders),
+    attrs = {"extinction": tables.extinction.tolist(), "g": tables.g.tolist(), "orders": list(tables.orders),
              "transport": tables.transport}
     write_exr(d / "single.exr", np.concatenate([tables.s_sun, tables.s_amb]).transpose(1, 2, 0),
-              [f"sun.s{s}" for s in sig] + [f"amb.s{s}" for s in sig], attrs=attrs, stage="precompute")
-    write_exr(d / "transmittance.exr", tables.transmittance.transpose(1, 2, 0), [f"T.s{s}" for s in sig],
+              [f"sun.e{s}" for s in sig] + [f"amb.e{s}" for s in sig], attrs=attrs, stage="precompute")
+    write_exr(d / "transmittance.exr", tables.transmittance.transpose(1, 2, 0), [f"T.e{s}" for s in sig],
               attrs=attrs, stage="precompute")
     H, W = tables.t_c.shape
     if tables.transport == "all_orders":
@@ -409,7 +430,7 @@ def save_tables(directory, tables: Tables, extra_meta: dict | None = None) -> di
                   attrs={**attrs, "channel_scale": scale.tolist()}, half=True, stage="precompute")
     else:
         K, Ng, Ns = tables.multiple.shape[:3]
-        names = [f"k{k}.g{g}.s{s}" for k in tables.orders for g in gt for s in sig]
+        names = [f"k{k}.g{g}.e{s}" for k in tables.orders for g in gt for s in sig]
         if K:
             write_exr(d / "multiple.exr", tables.multiple.reshape(K * Ng * Ns, H, W).transpose(1, 2, 0), names,
                       attrs=attrs, stage="precompute")
@@ -434,7 +455,7 @@ def load_tables(directory) -> Tables:
     d = Path(directory)
     meta = read_yaml(d / "meta.yaml")
     try:
-        sigmas = np.asarray(meta["sigma_t"], np.float64)
+        sigmas = np.asarray(meta["extinction"], np.float64)
         gs = np.asarray(meta["g"], np.float64)
         transport = meta.get("transport", "dobashi")
         orders = [int(k) for k in meta.get("orders", [])]
@@ -450,13 +471,13 @@ def load_tables(directory) -> Tables:
     extra = {}
     try:
         H, W = geo.pixels.shape[:2]
-        s_sun = _stack(single, [f"sun.s{s}" for s in sig], H, W)
-        s_amb = _stack(single, [f"amb.s{s}" for s in sig], H, W)
-        T = _stack(trans, [f"T.s{s}" for s in sig], H, W)
+        s_sun = _stack(single, [f"sun.e{s}" for s in sig], H, W)
+        s_amb = _stack(single, [f"amb.e{s}" for s in sig], H, W)
+        T = _stack(trans, [f"T.e{s}" for s in sig], H, W)
         multiple = np.zeros((0, len(gs), len(sigmas), H, W), np.float32)
         if transport == "dobashi" and orders:
             mult = read_exr(d / "multiple.exr")
-            names = [f"k{k}.g{g}.s{s}" for k in orders for g in gt for s in sig]
+            names = [f"k{k}.g{g}.e{s}" for k in orders for g in gt for s in sig]
             multiple = np.ascontiguousarray(_stack(mult, names, H, W).reshape(len(orders), len(gs), len(sigmas), H, W))
         elif transport == "all_orders":
             sb = tuple((int(a), None if e is None else int(e)) for a, e in meta["sun_bands"])

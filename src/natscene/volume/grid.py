@@ -146,6 +146,17 @@ def load_volume(directory) -> Volume:
                   float(meta["extinction_scale"]))
 
 
+def column_statistics(density: np.ndarray, voxel: float, axis: int = 0) -> dict:
+    """The column ∫ rho ds (metres, world units) along grid ``axis`` (0 = z, horizontal; 1 = y, vertical) over the
+    rays that hit the cloud: its mean, 95th percentile and maximum. Times an extinction in 1/m, the optical depth
+    through the cloud."""
+    col = density.sum(axis=axis, dtype=np.float64) * voxel
+    col = col[col > 0]
+    if not col.size:
+        return {"mean": 0.0, "p95": 0.0, "max": 0.0}
+    return {"mean": float(col.mean()), "p95": float(np.percentile(col, 95)), "max": float(col.max())}
+
+
 def mean_optical_depth(density: np.ndarray, voxel: float, axis: int = 0) -> float:
     """Mean of the integral of rho along ``axis`` (world units), over the rays that hit the cloud."""
     col = density.sum(axis=axis) * voxel
