@@ -37,6 +37,8 @@ rule composite:
         code=script_fingerprint("composite.py"),
     log:
         f"{RESULTS}/logs/composite/{{name}}.{{frame}}.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/rules/composite/composite/{{name}}.{{frame}}.tsv",
     threads: 2
     resources:
         mem_mb=estimated_mem_mb("composite"),
@@ -63,6 +65,8 @@ rule composite_reference:
         code=script_fingerprint("composite_reference.py"),
     log:
         f"{RESULTS}/logs/composite_reference/{{name}}.{{frame}}.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/rules/composite_reference/composite_reference/{{name}}.{{frame}}.tsv",
     threads: 2
     resources:
         mem_mb=estimated_mem_mb("composite_reference"),

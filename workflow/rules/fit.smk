@@ -50,6 +50,8 @@ rule fit:
         code=script_fingerprint("fit.py"),
     log:
         f"{RESULTS}/logs/fit/{{keyframe}}.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/rules/fit/fit/{{keyframe}}.tsv",
     threads: 1
     resources:
         mem_mb=estimated_mem_mb("fit"),

@@ -14,6 +14,8 @@ rule leaf_season:
         code=script_fingerprint("leaf_season.py"),
     log:
         f"{RESULTS}/logs/leaf_season/{{climate}}.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/rules/leaf_season/leaf_season/{{climate}}.tsv",
     threads: 1
     resources:
         mem_mb=estimated_mem_mb("leaf_season"),

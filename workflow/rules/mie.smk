@@ -31,6 +31,8 @@ rule mie_table:
         code=script_fingerprint("mie_table.py"),
     log:
         f"{RESULTS}/logs/mie/table.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/rules/mie_table/mie/table.tsv",
     threads: 1
     resources:
         mem_mb=estimated_mem_mb("mie_table"),
@@ -66,6 +68,8 @@ rule mie_table_droplets:
         code=script_fingerprint("mie_table.py"),
     log:
         f"{RESULTS}/logs/mie/table_{{droplets}}.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/rules/mie_table_droplets/mie/table_{{droplets}}.tsv",
     threads: 1
     resources:
         mem_mb=estimated_mem_mb("mie_table_droplets"),
@@ -88,6 +92,8 @@ rule point_scatter:
         code=script_fingerprint("point_scatter.py"),
     log:
         f"{RESULTS}/logs/mie/point_scatter/{{volume}}_{{sun}}_{{phase}}.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/rules/point_scatter/mie/point_scatter/{{volume}}_{{sun}}_{{phase}}.tsv",
     threads: 2
     resources:
         mem_mb=estimated_mem_mb("point_scatter"),
@@ -124,6 +130,8 @@ rule mie_render:
         code=script_fingerprint("mie_render.py"),
     log:
         f"{RESULTS}/logs/mie/render/{{volume}}_{{shot}}.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/rules/mie_render/mie/render/{{volume}}_{{shot}}.tsv",
     threads: 2
     resources:
         mem_mb=estimated_mem_mb("mie_render"),

@@ -11,6 +11,8 @@ rule pigment_maps:
         code=script_fingerprint("pigment_maps.py"),
     log:
         f"{RESULTS}/logs/pigment_maps/{{pattern}}.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/rules/pigment_maps/pigment_maps/{{pattern}}.tsv",
     threads: 2
     resources:
         mem_mb=estimated_mem_mb("pigment_maps"),
@@ -29,6 +31,8 @@ rule pattern_color:
         code=script_fingerprint("pattern_color.py"),
     log:
         f"{RESULTS}/logs/pattern_color/{{pattern}}.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/rules/pattern_color/pattern_color/{{pattern}}.tsv",
     threads: 1
     resources:
         mem_mb=estimated_mem_mb("pattern_color"),
@@ -48,6 +52,8 @@ rule recolour:
         code=script_fingerprint("recolour.py"),
     log:
         f"{RESULTS}/logs/recolour/{{photo}}.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/rules/recolour/recolour/{{photo}}.tsv",
     threads: 2
     resources:
         mem_mb=estimated_mem_mb("recolour"),
@@ -66,6 +72,8 @@ rule pattern_sheet:
         code=script_fingerprint("pattern_sheet.py"),
     log:
         f"{RESULTS}/logs/pattern_sheet.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/rules/pattern_sheet/pattern_sheet.tsv",
     threads: 1
     resources:
         mem_mb=estimated_mem_mb("pattern_sheet"),

@@ -109,6 +109,8 @@ rule interpolate:
         code=script_fingerprint("interpolate.py"),
     log:
         f"{RESULTS}/logs/shots/{{shot}}/interpolate.{{frame}}.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/rules/interpolate/shots/{{shot}}/interpolate.{{frame}}.tsv",
     threads: 1
     resources:
         mem_mb=estimated_mem_mb("interpolate"),
@@ -136,6 +138,8 @@ rule render_frame:
         code=script_fingerprint("render_frame.py"),
     log:
         f"{RESULTS}/logs/shots/{{shot}}/render_frame.{{frame}}.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/rules/render_frame/shots/{{shot}}/render_frame.{{frame}}.tsv",
     threads: config["threads"]
     resources:
         mem_mb=estimated_mem_mb("render_frame"),
@@ -158,6 +162,8 @@ rule animation:
         code=script_fingerprint("animation.py"),
     log:
         f"{RESULTS}/logs/shots/{{shot}}/animation.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/rules/animation/shots/{{shot}}/animation.tsv",
     threads: 1
     resources:
         mem_mb=estimated_mem_mb("animation"),

@@ -34,6 +34,8 @@ rule sky:
         code=script_fingerprint("sky.py"),
     log:
         f"{RESULTS}/logs/sky/{{photo}}.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/rules/sky/sky/{{photo}}.tsv",
     threads: 1
     resources:
         mem_mb=estimated_mem_mb("sky"),
@@ -57,6 +59,8 @@ rule sky_resample:
         code=script_fingerprint("sky_resample.py"),
     log:
         f"{RESULTS}/logs/sky/{{photo}}_{{W}}x{{H}}.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/rules/sky_resample/sky/{{photo}}_{{W}}x{{H}}.tsv",
     threads: 1
     resources:
         mem_mb=estimated_mem_mb("sky_resample"),

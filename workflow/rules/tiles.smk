@@ -13,6 +13,8 @@ rule tileset:
         code=script_fingerprint("tileset.py"),
     log:
         f"{RESULTS}/logs/tileset/{{texture}}.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/rules/tileset/tileset/{{texture}}.tsv",
     threads: 1
     resources:
         mem_mb=estimated_mem_mb("tileset"),
@@ -35,6 +37,8 @@ rule tile_texture:
         code=script_fingerprint("tile_texture.py"),
     log:
         f"{RESULTS}/logs/tile_texture/{{texture}}_{{w}}x{{h}}.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/rules/tile_texture/tile_texture/{{texture}}_{{w}}x{{h}}.tsv",
     threads: 1
     resources:
         mem_mb=estimated_mem_mb("tile_texture"),

@@ -16,6 +16,8 @@ rule volume:
         code=script_fingerprint("volume.py"),
     log:
         f"{RESULTS}/logs/volume/{{volume}}.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/rules/volume/volume/{{volume}}.tsv",
     threads: 2
     resources:
         mem_mb=estimated_mem_mb("volume"),
