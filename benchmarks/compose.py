@@ -41,7 +41,8 @@ def baseline(tb, p, sky):
 
 def dense_product(tb, p, sky):
     """The former compose_cloud: lerp weights as dense rows, one big matrix product over the whole table."""
-    from natscene.scatter.compose import lerp_weights, population
+    from natscene.scatter.params import population
+    from natscene.scatter.nodes import lerp_weights
     P, p = population(p)
     H, W = tb.t_c.shape
     K, Ng, Ns = tb.multiple.shape[:3]

@@ -41,7 +41,7 @@ import natscene  # noqa: F401
 from natscene.config import load_yaml_config, resolve_path, validate_config
 from natscene.geometry import Camera, sun_direction
 
-TRANSPORTS = ("all_orders", "dobashi")
+from natscene.scatter.transport import TRANSPORTS  # noqa: E402
 
 
 def main_job():
@@ -93,7 +93,7 @@ def repeated_noise(vol, camera, sun, settings, nodes=((0.2, 0.85), (0.5, 0.85)),
     from natscene.scatter.allorders import Lighting, Scene, view_images
     from natscene.scatter.bands import band_weights
     from natscene.scatter.single import march_view
-    from natscene.scatter.tables import skylight_dome
+    from natscene.scatter.transport.all_orders import skylight_dome
     out = {}
     for label, st in (("importance_on", settings),
                       ("importance_off", replace(settings, importance=False, sky_lobe_share=0.0))):
@@ -124,15 +124,15 @@ def repeated_noise(vol, camera, sun, settings, nodes=((0.2, 0.85), (0.5, 0.85)),
 def repeated_noise_target(vol, camera, sun, settings, sky=None, nodes=((0.5, 0.85), (1.0, 0.85)), reps: int = 3):
     """Item 3's figure at the main job's settings without the two-halves shortcut: each node traced ``reps``
     times with the noise target on, as the precompute traces it (budget, then top-ups), and the composed sun and
-    sky in luminance (:func:`natscene.scatter.tables.sky_luminance_weights`) at beta 0.9 / 0.99 / 0.999 taken
+    sky in luminance (:func:`natscene.scatter.transport.all_orders.sky_luminance_weights`) at beta 0.9 / 0.99 / 0.999 taken
     from the 2 x ``reps`` independent half-runs per pixel (relative standard error of one run: median and p95
     over the cloud pixels), beside the runs' own two-halves estimate (the figure the top-up aims at and
     ``meta.yaml`` reports, the mean over the runs), their budget scales and the seconds per node."""
     from natscene.phase import hg
     from natscene.scatter.allorders import Lighting, Scene, view_images
     from natscene.scatter.single import march_view
-    from natscene.scatter.tables import (NOISE_BETAS, _node_noise, composed_halves, skylight_dome,
-                                         sky_luminance_weights, target_figure)
+    from natscene.scatter.transport.all_orders import (NOISE_BETAS, composed_halves, node_noise, skylight_dome,
+                                                       sky_luminance_weights, target_figure)
     dome = skylight_dome(sun, sky)
     scene = Scene(vol, Lighting(np.asarray(sun), dome), settings)
     sky_w = sky_luminance_weights(sun, dome)
@@ -147,9 +147,9 @@ def repeated_noise_target(vol, camera, sun, settings, sky=None, nodes=((0.5, 0.8
         t0 = time.perf_counter()
         for r in range(reps):
             vi = view_images(scene, camera, sigma, g, seed=2000 + r,
-                             noise=lambda v: target_figure(_node_noise(v, settings.sun_bands, settings.sky_bands,
+                             noise=lambda v: target_figure(node_noise(v, settings.sun_bands, settings.sky_bands,
                                                                        sky_w, foot, single_sun)))
-            est = _node_noise(vi, settings.sun_bands, settings.sky_bands, sky_w, foot, single_sun)
+            est = node_noise(vi, settings.sun_bands, settings.sky_bands, sky_w, foot, single_sun)
             estimates.append({b: est[f"sun_and_sky.beta{b:g}"] for b in NOISE_BETAS})
             scales.append(float(vi.stats.get("budget_scale", 1.0)))
             for b in NOISE_BETAS:

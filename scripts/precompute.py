@@ -10,6 +10,7 @@ def main(snakemake, log):
     from natscene.scatter.allorders import settings_from_config
     from natscene.scatter.contact import contact_sheet
     from natscene.scatter.tables import precompute, save_tables
+    from natscene.scatter.transport import get as get_transport
     from natscene.variant import select_variant
     from natscene.volume.grid import load_volume
 
@@ -21,8 +22,7 @@ def main(snakemake, log):
     sun = sun_direction(view["sun"]["azimuth"], view["sun"]["elevation"])
     transport = cfg["transport"]
     settings = settings_from_config(cfg)
-    detail = (f"n_m={cfg['n_m']}, {cfg['spp']} spp" if transport == "dobashi" else
-              f"{settings.sun_collisions:.3g} + {settings.sky_collisions:.3g} photon collisions per node")
+    detail = get_transport(transport).describe(cfg)
     log.info(f"precompute {snakemake.wildcards.volume} x {snakemake.wildcards.view}: {camera.width}x{camera.height}, "
              f"{len(cfg['extinction'])} extinctions x {len(cfg['g'])} g, transport {transport}, {detail} ({variant})")
     tables = precompute(volume, camera, sun, extinctions=cfg["extinction"], gs=cfg["g"], n_m=cfg["n_m"], spp=cfg["spp"],

@@ -12,7 +12,8 @@ import pytest
 import natscene  # noqa: F401
 from natscene.errors import InputError
 from natscene.geometry import Camera, ray_box
-from natscene.scatter.compose import apply_atmosphere, compose, compose_cloud, lerp_weights
+from natscene.scatter.compose import apply_atmosphere, compose, compose_cloud
+from natscene.scatter.nodes import lerp_weights
 from natscene.scatter.medium import make_medium
 from natscene.scatter.mitsuba_scene import render_reference, render_transmittance
 from natscene.scatter.multiple import trace_orders

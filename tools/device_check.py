@@ -77,7 +77,7 @@ def main():
     from natscene.geometry import Camera, sun_direction
     from natscene.keyframes.frame import render_shot_frame
     from natscene.scatter.allorders import Lighting, Scene, settings_from_config, view_images
-    from natscene.scatter.tables import skylight_dome
+    from natscene.scatter.transport.all_orders import skylight_dome
     from natscene.volume.build import build_volume
     from shots import PARAMS, _state
 

@@ -135,12 +135,13 @@ def _table_values(config: dict, pixels: int) -> int:
     pre = config.get("precompute") or {}
     n_s = len(pre.get("extinction", [0] * 9))
     n_g = len(pre.get("g", [0] * 10))
-    if pre.get("transport", "all_orders") == "all_orders":
-        ao = pre.get("all_orders") or {}
-        per_node = len(ao.get("sun_bands") or [0] * 8) + 4 * len(ao.get("sky_bands") or [0] * 3)
-    else:
-        per_node = max(int(pre.get("n_m", 4)) - 1, 1)
+    per_node = _transport(pre.get("transport", "all_orders")).values_per_node(pre)
     return pixels * n_s * (4 + n_g * per_node)
+
+
+def _transport(name: str):
+    from natscene.scatter.transport import get
+    return get(name)
 
 
 def _texture_pixels(config: dict, src: dict | None, root) -> int:
@@ -202,9 +203,8 @@ def job_features(rule: str, config: dict, wildcards: dict, root) -> tuple[str, d
         feats["pixels"], keys["pixels"] = p, f"views.{wc['view']}.resolution"
         feats["table_values"], keys["table_values"] = _table_values(config, p), f"views.{wc['view']}.resolution"
         pre = config.get("precompute") or {}
-        if pre.get("transport", "all_orders") == "all_orders":
-            model = "precompute_all_orders"
-        else:
+        model = _transport(pre.get("transport", "all_orders")).memory_model(rule)
+        if "paths" in MODEL[model]:
             feats["paths"] = _paths_per_pass(p, pre.get("spp", 256), pre.get("batch_spp"))
             keys["paths"] = "precompute.batch_spp"
     elif rule == "fit":
@@ -212,8 +212,7 @@ def job_features(rule: str, config: dict, wildcards: dict, root) -> tuple[str, d
         p = _pixels(config["views"][kf["view"]].get("resolution", [320, 240]))
         feats["pixels"], keys["pixels"] = p, f"views.{kf['view']}.resolution"
         feats["table_values"], keys["table_values"] = _table_values(config, p), f"views.{kf['view']}.resolution"
-        if (config.get("precompute") or {}).get("transport", "all_orders") == "all_orders":
-            model = "fit_all_orders"
+        model = _transport((config.get("precompute") or {}).get("transport", "all_orders")).memory_model(rule)
     elif rule in ("sky", "sky_resample"):
         ph = config["photos"][wc["photo"]]
         size = image_size(resolve_path(ph["path"], root))
@@ -224,11 +223,11 @@ def job_features(rule: str, config: dict, wildcards: dict, root) -> tuple[str, d
         p = _pixels(shot.get("resolution", [640, 480]))
         feats["pixels"], keys["pixels"] = p, f"shots.{wc['shot']}.resolution"
         r = shot.get("render") or {}
-        if r.get("transport", "all_orders") == "all_orders":
-            model = "render_frame_all_orders"
+        model = _transport(r.get("transport", "all_orders")).memory_model(rule)
+        if "collisions" in MODEL[model]:
             feats["collisions"] = int(r.get("sun_collisions", 0)) + int(r.get("sky_collisions", 0))
             keys["collisions"] = f"shots.{wc['shot']}.render.sun_collisions"
-        else:
+        if "paths" in MODEL[model]:
             feats["paths"] = _paths_per_pass(p, r.get("spp", 16))
             keys["paths"] = f"shots.{wc['shot']}.resolution"
     elif rule == "point_scatter":

@@ -25,14 +25,16 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-PARAMS = ("L_in", "g", "extinction", "beta", "L_amb")       # transport: dobashi (the paper's five)
-PARAMS_ALL_ORDERS = ("L_in", "g", "extinction", "beta")     # transport: all_orders (the skylight replaces L_amb)
+PARAMS = ("L_in", "g", "extinction", "beta", "L_amb")       # every parameter a transport may fit (the paper's five)
 LOG_PARAMS = frozenset({"extinction"})                      # searched on a log scale (lo > 0)
 
 
 def fit_params(transport: str) -> tuple:
-    """The GA's parameters for a transport model."""
-    return PARAMS_ALL_ORDERS if transport == "all_orders" else PARAMS
+    """The GA's parameters for a transport model (:attr:`natscene.scatter.transport.base.Transport.fit_params`)."""
+    from natscene.scatter.transport import get
+    return get(transport).fit_params
+
+
 DEFAULT_RANGES = {"L_in": (0.0, 10.0), "g": (0.0, 1.0), "extinction": (0.002, 0.3), "beta": (0.9999, 1.0),
                   "L_amb": (0.0, 1.0)}
 

@@ -17,6 +17,7 @@ from natscene.fit.objective import Levels
 from natscene.fit.problem import FitProblem
 from natscene.fit.settings import FitSettings, fit_settings
 from natscene.errors import InputError
+from natscene.scatter.transport import get as get_transport
 
 
 def effective_ranges(settings: dict | FitSettings, tables, log=None) -> dict:
@@ -81,18 +82,7 @@ def fit_keyframe(tables, photo, photo_cloud, sky, c_in, settings: dict | FitSett
         raise InputError("config key 'fit.kappa': max is below min")
     levels = Levels(st.n_levels, st.encoding)
     transport = getattr(tables, "transport", "dobashi")
-    fixed = {}
-    if transport == "all_orders":
-        from natscene.scatter.skylight import calibration
-        view_mean = tables.meta.get("skylight", {}).get("view_mean_rgb")
-        if view_mean is None:
-            raise InputError("the precompute's meta.yaml has no skylight.view_mean_rgb; rerun the precompute rule")
-        fixed = {"sky_scale": calibration(np.asarray(sky, np.float64).reshape(-1, 3).mean(0), view_mean),
-                 "ground_albedo": np.broadcast_to(np.asarray(st.ground_albedo, np.float64), (3,))}
-        if not st.skylight:        # the sun alone lights the cloud
-            fixed = {"sky_scale": np.zeros(3), "ground_albedo": np.zeros(3)}
-        log(f"all-orders transport: the sky dome calibrated to the photo's L_sky by "
-            f"{np.round(fixed['sky_scale'], 4).tolist()}, ground albedo {fixed['ground_albedo'].tolist()}")
+    fixed = get_transport(transport).fit_fixed(tables, sky, st, log)
     problem = FitProblem(tables, sky, photo, photo_cloud, c_in, levels=levels,
                          metric=st.metric, kappas=kappa_grid(kap.min, kap.max, kap.step),
                          compose_cloud=compose_cloud, apply_atmosphere=apply_atmosphere, fixed=fixed)

@@ -11,6 +11,7 @@ import numpy as np
 
 from natscene.io import to_srgb8
 from natscene.preview import label
+from natscene.scatter.transport import of
 
 
 def _nearest(grid, x) -> int:
@@ -33,27 +34,8 @@ def contact_sheet(tables, gs=(0.0, 0.5, 0.9)) -> np.ndarray:
             tiles.append(label(to_srgb8(arr[i], exp), f"{name} e={tables.extinction[i]:g}/m", "table"))
         rows.append(np.concatenate(tiles, axis=1))
     si = picks[1]
-    if getattr(tables, "transport", "dobashi") == "all_orders":
-        from natscene.scatter.bands import band_weights
-        for name in ("sun", "sky"):
-            tiles = []
-            for g in gs:
-                gi = _nearest(tables.g, g)
-                if name == "sun":
-                    w = band_weights(tables.sun_bands, tables.sun_ratios[gi, si], 0.99)[0]
-                    img = np.tensordot(w, tables.sun_ms[:, gi, si], 1)
-                else:
-                    w = band_weights(tables.sky_bands, tables.sky_ratios[gi, si], 0.99)[0]
-                    img = np.moveaxis(np.tensordot(w, tables.sky_ms[:3, :, gi, si], (0, 1)), 0, -1)
-                tiles.append(label(to_srgb8(img), f"{name} all orders g={tables.g[gi]:g} e={tables.extinction[si]:g}/m",
-                                   "table"))
-            rows.append(np.concatenate(tiles, axis=1))
-        return np.concatenate(rows, axis=0)
-    for ki, k in enumerate(tables.orders):
-        tiles = []
-        for g in gs:
-            gi = _nearest(tables.g, g)
-            tiles.append(label(to_srgb8(tables.multiple[ki, gi, si]),
-                               f"E{k} g={tables.g[gi]:g} e={tables.extinction[si]:g}/m", "table"))
-        rows.append(np.concatenate(tiles, axis=1))
+    gis = [_nearest(tables.g, g) for g in gs]
+    for row in of(tables).preview_rows(tables, si, gis):
+        rows.append(np.concatenate([label(to_srgb8(img), f"{name} g={tables.g[gi]:g} e={tables.extinction[si]:g}/m",
+                                          "table") for (name, img), gi in zip(row, gis)], axis=1))
     return np.concatenate(rows, axis=0)

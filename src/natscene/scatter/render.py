@@ -1,39 +1,21 @@
 """The forward renderer: the cloud model evaluated directly, without tables, at any view, sun and resolution
 (the keyframe frames), with the same transport as the precompute.
 
-Common to both transports: the sun optical-depth volume for this sun (:mod:`natscene.scatter.medium`) and
-the ray-marched S_sun, S_amb, T at the given extinction in 1/m (``params["extinction"]``, mu_t = e rho; the
-tracers take the volume's unitless sigma_t = e / ``extinction_scale``) (:mod:`natscene.scatter.single`), then
-Eqs. 4 and 3.
-
-- ``transport="all_orders"`` (default): every order of the sun's light and of the skylight by photon
-  tracing into the in-scatter cache (:mod:`natscene.scatter.allorders`) at this one (extinction, g), composed
-  as :func:`natscene.scatter.compose.compose` does: the bands weighted by their closed-form albedo weights,
-  the sky dome (``dome``, or the Preetham sky of ``sky_settings`` for this sun, the same sky the frame shows
-  behind the cloud) and a Lambertian ground of ``ground_albedo``; L_amb is not used.
-- ``transport="dobashi"``: orders 2..``orders`` by path tracing with directions importance-sampled from
-  HG(g) itself (:mod:`natscene.scatter.multiple` with one g) and the ambient term L_amb S_amb (Eq. 5).
+Common to every transport: the sun optical-depth volume for this sun (:mod:`natscene.scatter.medium`) and the
+ray-marched S_sun, S_amb, T at the given extinction in 1/m (``params["extinction"]``, mu_t = e rho; the tracers
+take the volume's unitless sigma_t = e / ``extinction_scale``) (:mod:`natscene.scatter.single`); the transport
+(:mod:`natscene.scatter.transport`, ``transport=``) gives the cloud's own light (its ``render``: single and
+multiple scattering, and for ``all_orders`` the skylight of the frame's dome), then Eq. 4 adds the sky seen
+through the cloud, L_b = T L_sky, and Eq. 3 the atmosphere.
 """
 from __future__ import annotations
 
 import numpy as np
 
 from natscene.errors import InputError
-from natscene.scatter.compose import DEFAULT_GROUND_ALBEDO, population
-from natscene.scatter.phase import hg
-
-RENDER_TRANSPORTS = ("all_orders", "dobashi")
-
-
-def frame_dome(sun_dir, sky_settings: dict | None):
-    """The dome that lights a frame's cloud: the shot's Preetham sky for this sun (or a constant colour)."""
-    from natscene.scatter.skylight import Dome, daylight_dome
-    s = dict(sky_settings or {})
-    if s.get("model", "preetham") == "constant":
-        c = np.asarray(s.get("color", [0.3, 0.45, 0.8]), np.float64)
-        return Dome(np.broadcast_to(c, (8, 16, 3)).copy(), np.zeros(3))
-    return daylight_dome(sun_dir, s.get("turbidity", 3.0), s.get("zenith_luminance", 0.3),
-                         s.get("reference_elevation", 35.0))
+from natscene.scatter.params import population
+from natscene.scatter.skylight import DEFAULT_GROUND_ALBEDO
+from natscene.scatter.transport.base import RenderOptions
 
 
 def render(volume, camera, sun_dir, params: dict, sky, orders: int = 4, spp: int = 64, seed: int = 0,
@@ -59,10 +41,9 @@ def render(volume, camera, sun_dir, params: dict, sky, orders: int = 4, spp: int
     from natscene.scatter.medium import make_medium
     from natscene.scatter.single import march_view
     from natscene.scatter.tables import geometry_images
+    from natscene.scatter.transport import get
 
-    if transport not in RENDER_TRANSPORTS:
-        raise InputError(f"render: unknown transport {transport!r} (one of {', '.join(RENDER_TRANSPORTS)}); "
-                         f"config key 'shots.<name>.render.transport'")
+    model = get(transport, "shots.<name>.render.transport")
     P, p = population(params)
     if P != 1:
         raise InputError(f"render: one parameter set expected, got a population of {P}")
@@ -74,7 +55,7 @@ def render(volume, camera, sun_dir, params: dict, sky, orders: int = 4, spp: int
         raise InputError(f"render: sky image has shape {sky.shape}, the camera renders {W}x{H}")
     if orders < 1:
         raise InputError(f"render: orders must be >= 1, got {orders}")
-    extinction, g, beta = float(p["extinction"][0]), float(p["g"][0]), float(p["beta"][0])
+    extinction = float(p["extinction"][0])
     if not extinction >= 0.0:
         raise InputError(f"render: extinction {extinction:g} /m is negative (a keyframe's or "
                          f"shots.<name>.keyframes' extinction)")
@@ -83,60 +64,13 @@ def render(volume, camera, sun_dir, params: dict, sky, orders: int = 4, spp: int
     single = march_view(med, camera, [sigma], step_voxels=step_voxels, supersample=supersample,
                         rho_threshold=rho_threshold)
     t_c, cos_t, foot = geometry_images(camera, volume, med.sun_dir, single["t_hit"])
-    c_in = p["c_in"][0].astype(np.float32)
-    L_in, L_amb = float(p["L_in"][0]), float(p["L_amb"][0])
-    comps = {}
-    if transport == "all_orders":
-        from natscene.scatter.allorders import AllOrdersSettings, Lighting, Scene, view_images
-        from natscene.scatter.bands import band_weights
-        from natscene.scatter.skylight import ground_radiance, irradiance
-        from dataclasses import replace
-        st = replace(all_orders if all_orders is not None else AllOrdersSettings(), step_voxels=step_voxels,
-                     supersample=supersample)
-        if sun_collisions is not None:
-            st.sun_collisions = int(sun_collisions)
-        if sky_collisions is not None:
-            st.sky_collisions = int(sky_collisions)
-        if tally_rate is not None:
-            st.tally_rate = float(tally_rate)
-        if ground_share is not None:
-            st.p_ground = float(ground_share)
-        st.camera_lobe = float(camera_lobe)
-        st.sun_photons_max = max(st.sun_photons_max, st.sun_collisions // 2)
-        st.sky_photons_max = max(st.sky_photons_max, st.sky_collisions // 2)
-        if skylight:
-            dome = dome if dome is not None else frame_dome(med.sun_dir, sky_settings)
-        else:
-            dome = None
-        scene = Scene(volume, Lighting(med.sun_dir, dome), st)
-        vi = view_images(scene, camera, sigma, g, seed=seed)
-        a_s = L_in * beta * hg(cos_t, g) * single["S_sun"][0]
-        a_m = L_in * np.tensordot(band_weights(st.sun_bands, vi.sun_ratios, beta)[0], vi.sun, 1)
-        L_sky_lit = np.zeros((H, W, 3), np.float32)
-        if dome is not None:
-            ck = band_weights(st.sky_bands, vi.sky_ratios, beta)[0]
-            sky_bands = np.tensordot(ck, np.moveaxis(vi.sky, 1, 0), 1)          # (4, H, W)
-            sin_el = max(float(med.sun_dir[1]), 0.0)
-            G = ground_radiance(np.broadcast_to(np.asarray(ground_albedo, np.float64), (3,)),
-                                L_in * c_in * sin_el, irradiance(dome))
-            L_sky_lit = (np.moveaxis(sky_bands[:3], 0, -1)
-                         + sky_bands[3][..., None] * G[None, None, :].astype(np.float32))
-        L_s = a_s[..., None].astype(np.float32) * c_in
-        L_m = a_m[..., None].astype(np.float32) * c_in
-        comps.update(L_sky_lit=L_sky_lit.astype(np.float32), photons=vi.stats)
-        cloud = L_s + L_m + L_sky_lit
-    else:
-        from natscene.scatter.multiple import trace_orders
-        a_s = L_in * beta * hg(cos_t, g) * single["S_sun"][0] + L_amb * single["S_amb"][0]
-        a_m = np.zeros((H, W))
-        if orders >= 2 and sigma > 0:
-            e = trace_orders(med, camera, sigma, [g], n_max=orders, spp=spp, seed=seed, batch_spp=batch_spp)
-            for k in range(2, orders + 1):
-                a_m += beta ** k * e[k - 1, 0]
-            a_m *= L_in
-        L_s = a_s[..., None].astype(np.float32) * c_in
-        L_m = a_m[..., None].astype(np.float32) * c_in
-        cloud = L_s + L_m
+    options = RenderOptions(seed=seed, step_voxels=step_voxels, supersample=supersample, orders=orders, spp=spp,
+                            batch_spp=batch_spp, sky_settings=sky_settings, dome=dome, ground_albedo=ground_albedo,
+                            sun_collisions=sun_collisions, sky_collisions=sky_collisions, skylight=skylight,
+                            all_orders=all_orders, tally_rate=tally_rate, ground_share=ground_share,
+                            camera_lobe=camera_lobe)
+    cloud, comps = model.render(volume, med, camera, sigma, single, cos_t, p, sky, options)
+    L_s, L_m = comps["L_s"], comps["L_m"]
     T = single["T"][0]
     L_b = T[..., None] * sky
     L_c = cloud + L_b

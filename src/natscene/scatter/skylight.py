@@ -20,6 +20,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+DEFAULT_GROUND_ALBEDO = 0.2      # the Lambertian ground's albedo when none is given (fit.ground_albedo's default)
+
 
 @dataclass
 class Dome:

@@ -1,0 +1,494 @@
+"""Transport ``all_orders`` (the default): every scattering order of the sun's light and the skylight, in bands.
+
+Dobashi 2012 truncates multiple scattering at order 4 and adds a constant ambient term (§3); his §7 names the
+remedies, clustering the high orders into sets (Bouthors et al. 2008) and the skylight as a light source. This
+transport traces every order of the sun's light and of a sky dome's (:mod:`natscene.scatter.allorders`,
+:mod:`natscene.scatter.photons`) into bands of orders whose albedo dependence is closed-form
+(:mod:`natscene.scatter.bands`), so the GA composes any beta in milliseconds:
+
+    L_c  = c_in L_in [beta p(θ_q, g) S_sun + Σ_b c_b(beta) T_b^sun]
+           + Σ_b c'_b(beta) [a ⊙ T_b^{sky,RGB} + G T_b^{ground}] + T L_sky,
+    G    = albedo / π (L_in c_in sin(el_sun) + a ⊙ E_dome)
+
+with the sky dome's R, G, B channels and a unit-radiance ground, c_b(beta) the bands' albedo weights, a the dome's
+calibration to the photo (:func:`natscene.scatter.skylight.calibration`), E_dome its horizontal irradiance and G
+the radiance of a Lambertian ground of ``ground_albedo``; interpolated bilinearly in the extinction and g between
+the tables' nodes. The GA searches L_in, g, the extinction and beta; the skylight replaces L_amb.
+"""
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from natscene.errors import InputError
+from natscene.io import read_exr, write_exr
+from natscene.scatter.nodes import brackets
+from natscene.scatter.params import rgb_per_individual
+from natscene.scatter.skylight import DEFAULT_GROUND_ALBEDO
+from natscene.scatter.phase import INV_4PI, hg
+from natscene.scatter.transport.base import Arrays, RenderOptions, Transport, noise_stats
+
+try:  # a fused compiled kernel where numba is importable (it is a declared dependency); numpy otherwise
+    import numba as _nb
+except Exception:  # noqa: BLE001
+    _nb = None
+
+__all__ = ["AllOrders", "NOISE_BETAS", "composed_halves", "frame_dome", "node_noise", "sky_luminance_weights",
+           "skylight_dome", "target_figure"]
+
+SKY_CHANNELS = ("R", "G", "B", "ground")
+_KERNEL = None
+_CHUNK = 1024
+
+
+def frame_dome(sun_dir, sky_settings: dict | None):
+    """The dome that lights a frame's cloud: the shot's Preetham sky for this sun (or a constant colour)."""
+    from natscene.scatter.skylight import Dome, daylight_dome
+    s = dict(sky_settings or {})
+    if s.get("model", "preetham") == "constant":
+        c = np.asarray(s.get("color", [0.3, 0.45, 0.8]), np.float64)
+        return Dome(np.broadcast_to(c, (8, 16, 3)).copy(), np.zeros(3))
+    return daylight_dome(sun_dir, s.get("turbidity", 3.0), s.get("zenith_luminance", 0.3),
+                         s.get("reference_elevation", 35.0))
+
+
+
+NOISE_BETAS = (0.9, 0.99, 0.999)
+
+
+def skylight_dome(sun_dir, sky: dict | None):
+    """The sky dome that lights the cloud for the precompute and its settings (``precompute.skylight``)."""
+    from natscene.scatter.skylight import daylight_dome
+    sky = dict(sky or {})
+    model = sky.get("model", "preetham")
+    if model != "preetham":
+        raise InputError(f"config key 'precompute.skylight.model': unknown sky model {model!r} (preetham)")
+    return daylight_dome(sun_dir, float(sky.get("turbidity", 3.0)))
+
+
+def sky_luminance_weights(sun_dir, dome) -> np.ndarray:
+    """Weights that compose the sky's four traced channels (the dome's R, G, B and a unit-radiance ground) in
+    luminance for the noise figures: Rec. 709 luma of R, G, B, and of a ground of albedo 0.2 lit by the sun
+    (irradiance 1 at ``sun_dir``) and the dome."""
+    from natscene.color import LUMA_709
+    from natscene.scatter.skylight import ground_radiance, irradiance
+    s_dir = np.asarray(sun_dir, np.float64) / np.linalg.norm(sun_dir)
+    ground = ground_radiance(np.full(3, 0.2), max(float(s_dir[1]), 0.0), irradiance(dome))
+    return np.concatenate([LUMA_709, [float(ground @ LUMA_709)]])
+
+
+def target_figure(noise: dict) -> tuple[float, float]:
+    """The figure a node's noise target is checked against (``precompute.all_orders.noise_target``): of the
+    per-pixel relative standard errors of :func:`node_noise`, the sun and sky composed together, the median and
+    the p95 over the cloud pixels, each the worst of the betas."""
+    e = [v for k, v in noise.items() if k.startswith("sun_and_sky.") and v.size]
+    return tuple(max((float(np.percentile(v, q)) for v in e), default=0.0) for q in (50, 95))
+
+
+def composed_halves(vi, sun_bands, sky_bands, sky_w, beta: float) -> dict:
+    """The two halves of one node's composed multiple scattering at albedo ``beta`` (Σ_b c_b(β) T_b per half):
+    ``sun`` (orders >= 2), ``sky`` (R + G + B, orders >= 1) and ``sun_and_sky`` (luminance, weights ``sky_w`` of
+    the dome's R, G, B and the ground, :func:`sky_luminance_weights`)."""
+    from natscene.scatter.bands import band_weights
+    cs = band_weights(sun_bands, vi.sun_ratios, beta)[0]
+    ck = band_weights(sky_bands, vi.sky_ratios, beta)[0]
+    sun = [np.tensordot(cs, vi.sun_halves[h], 1) for h in range(2)]
+    sky = [np.tensordot(ck, vi.sky_halves[h][:3].sum(0), 1) for h in range(2)]
+    both = [sun[h] + np.tensordot(ck, np.tensordot(sky_w, vi.sky_halves[h], 1), 1) for h in range(2)]
+    return {"sun": sun, "sky": sky, "sun_and_sky": both}
+
+
+def node_noise(vi, sun_bands, sky_bands, sky_w, foot, single_sun) -> dict:
+    """Per-pixel relative standard error of one node's composed multiple scattering (two-halves estimate,
+    :func:`natscene.scatter.allorders.standard_error`) over its cloud pixels, per ``<part>.beta<b>``: the sun's
+    (orders >= 2), the sky's (R + G + B, orders >= 1), the two together (luminance, weights ``sky_w`` of the
+    dome's R, G, B and the ground) and the two together over the composed pixel (``single_sun``: its order 1
+    over beta)."""
+    from natscene.scatter.allorders import standard_error
+    out = {}
+    for b in NOISE_BETAS:
+        for part, (x, y) in composed_halves(vi, sun_bands, sky_bands, sky_w, b).items():
+            m = (x + y) / 2
+            se = standard_error(x, y)
+            ok = foot & (m > 0)
+            out[f"{part}.beta{b:g}"] = (se[ok] / m[ok]).astype(np.float32)
+            if part == "sun_and_sky":          # the same error over the composed cloud pixel
+                pixel = b * single_sun + m
+                ok = foot & (pixel > 0)
+                out[f"pixel.beta{b:g}"] = (se[ok] / pixel[ok]).astype(np.float32)
+    return out
+
+
+def _multiple(volume, camera, sun_dir, sigmas, gs, settings, sky, seed, log, single):
+    """Band images of the sun's and the sky's light over the (g, extinction) grid, their ratios and noise
+    (``sigmas``: the volume's unitless sigma_t of each node; ``single``: the precompute's
+    :func:`natscene.scatter.single.march_view` of the grid)."""
+    from natscene.scatter.allorders import Lighting, Scene, view_images
+    from natscene.scatter.skylight import irradiance
+    from natscene.sky.daylight import preetham_rgb
+    dome = skylight_dome(sun_dir, sky)
+    scene = Scene(volume, Lighting(np.asarray(sun_dir, np.float64), dome), settings)
+    H, W = camera.height, camera.width
+    Ng, Ns = len(gs), len(sigmas)
+    sb, kb = settings.sun_bands, settings.sky_bands
+    sun_ms = np.zeros((len(sb), Ng, Ns, H, W), np.float32)
+    sky_ms = np.zeros((4, len(kb), Ng, Ns, H, W), np.float32)
+    sun_r = np.ones((Ng, Ns, len(sb)))
+    sky_r = np.ones((Ng, Ns, len(kb)))
+    noise = {f"{part}.beta{b:g}": [] for part in ("sun", "sky", "sun_and_sky", "pixel") for b in NOISE_BETAS}
+    # the composed multiple scattering as the sun (irradiance 1) and the dome light the cloud, in luminance:
+    # the dome's R, G, B and the ground (albedo 0.2 under the sun and the dome), and the pixel's single scattering
+    from natscene.phase import hg
+    s_dir = np.asarray(sun_dir, np.float64) / np.linalg.norm(sun_dir)
+    sky_w = sky_luminance_weights(s_dir, dome)
+    cos_q = camera.ray_directions() @ s_dir
+    foot = single["footprint"] > 0
+    counts = {"sun_photons": 0, "sun_collisions": 0, "sky_photons": 0, "sky_collisions": 0}
+    truncated = 0.0
+    scales = []
+    todo = [(i, j) for i in range(Ns) if sigmas[i] > 0 for j in range(Ng)]
+    t0 = time.perf_counter()
+    for n, (i, j) in enumerate(todo):
+        single_sun = hg(cos_q, gs[j]) * single["S_sun"][i]          # the pixel's order 1 over beta
+
+        def figures(vi):
+            return node_noise(vi, sb, kb, sky_w, foot, single_sun)
+
+        vi = view_images(scene, camera, float(sigmas[i]), float(gs[j]), seed=seed * 100003 + i * 101 + j,
+                         noise=lambda vi: target_figure(figures(vi)))
+        sun_ms[:, j, i] = vi.sun
+        sky_ms[:, :, j, i] = vi.sky
+        sun_r[j, i], sky_r[j, i] = vi.sun_ratios, vi.sky_ratios
+        for k in counts:
+            counts[k] += int(vi.stats.get(k, 0))
+        truncated = max(truncated, vi.stats.get("sun_truncated", 0.0))
+        scales.append(float(vi.stats.get("budget_scale", 1.0)))
+        for k, v in figures(vi).items():
+            noise[k].append(v)
+        el = time.perf_counter() - t0
+        log(f"all orders extinction={sigmas[i] * volume.extinction_scale:.4g}/m g={gs[j]:g}: {vi.stats.get('sun_photons', 0)} sun + "
+            f"{vi.stats.get('sky_photons', 0)} sky photons (budget x{scales[-1]:.2f}; {n + 1}/{len(todo)}, {el:.0f} s, "
+            f"about {el / (n + 1) * (len(todo) - n - 1):.0f} s left)")
+    dirs = camera.ray_directions()
+    view_rgb = preetham_rgb(dirs.reshape(-1, 3), sun_dir, float((sky or {}).get("turbidity", 3.0))).reshape(-1, 3)
+    s = np.asarray(sun_dir, np.float64)
+    meta = {
+        "sun_bands": [[a, e] for a, e in sb], "sky_bands": [[a, e] for a, e in kb],
+        "sun_ratios": np.round(sun_r, 6).tolist(), "sky_ratios": np.round(sky_r, 6).tolist(),
+        "skylight": {"model": "preetham", "turbidity": float((sky or {}).get("turbidity", 3.0)),
+                     "view_mean_rgb": view_rgb.mean(0).tolist(), "irradiance_rgb": irradiance(dome).tolist(),
+                     "sun_elevation_sin": float(s[1] / np.linalg.norm(s))},
+        "photons": counts, "truncated_light": float(truncated),
+        # photons per node as a multiple of the collision budget's (noise_target tops the noisy nodes up),
+        # per node, extinction > 0 in order, g within each extinction
+        "budget_scale": [round(x, 3) for x in scales],
+        "settings": {"sun_collisions": int(settings.sun_collisions), "sky_collisions": int(settings.sky_collisions),
+                     "sun_photons_max": int(settings.sun_photons_max), "sky_photons_max": int(settings.sky_photons_max),
+                     "fine_voxels": int(settings.fine_voxels), "coarse_voxels": int(settings.coarse_voxels),
+                     "guide_width": [float(x) for x in settings.guide_width], "max_order": int(settings.max_order),
+                     "majorant_voxels": int(settings.majorant_voxels), "camera_lobe": float(settings.camera_lobe),
+                     "noise_target": [float(x) for x in settings.noise_target],
+                     "max_budget_scale": float(settings.max_budget_scale)},
+        # per-pixel standard error of the composed multiple-scattering term divided by the term, over the
+        # cloud pixels and every (g, extinction) node: the sun's (orders >= 2), the sky's (R+G+B, orders >= 1), the
+        # two together (luminance, the sun's irradiance 1 and the dome as it lit the cloud); "pixel": the error of
+        # the two together divided by the composed cloud pixel (single scattering included)
+        "pixel_relative_standard_error": {k: noise_stats(v) for k, v in noise.items()},
+    }
+    return sun_ms, sky_ms, sun_r, sky_r, meta
+
+
+def _kernel():
+    """Fused all-orders composition, parallel over pixel chunks (compiled once, cached). Each chunk composes
+    every individual in turn, so the table rows of the nodes the population shares are read from main
+    memory once per chunk and from cache after that."""
+    global _KERNEL
+    if _KERNEL is None:
+        @_nb.njit(parallel=True, cache=True, fastmath=True)
+        def kernel(s_sun, s_T, sun_ms, sky_ms, cos_t, sky, sidx, ws, gidx, wsun, wsky, gpar, a_sun, c_in, a_sky, G,
+                   out):
+            P, N = out.shape[0], out.shape[1]
+            Bs, Bk = sun_ms.shape[2], sky_ms.shape[3]
+            nchunk = (N + _CHUNK - 1) // _CHUNK
+            for ci in _nb.prange(nchunk):
+                n0 = ci * _CHUNK
+                n1 = min(n0 + _CHUNK, N)
+                m = n1 - n0
+                acc = np.empty(m, np.float32)
+                acc_k = np.empty((4, m), np.float32)      # the sky bands' dome R, G, B and ground light
+                for j in range(P):
+                    s0, s1 = sidx[j, 0], sidx[j, 1]
+                    w0, w1 = ws[j, 0], ws[j, 1]
+                    g = gpar[j]
+                    c_ph = np.float32((1.0 - g * g) * 0.07957747154594767) * a_sun[j]
+                    opg = np.float32(1.0 + g * g)
+                    tg = np.float32(2.0 * g)
+                    for n in range(m):
+                        q = n0 + n
+                        d = opg - tg * cos_t[q]
+                        acc[n] = c_ph / (d * np.sqrt(d)) * (w0 * s_sun[s0, q] + w1 * s_sun[s1, q])
+                    acc_k[:] = 0
+                    for u in range(2):
+                        gi = gidx[j, u]
+                        for v in range(2):
+                            si = sidx[j, v]
+                            for b in range(Bs):
+                                w = wsun[j, u, v, b]
+                                if w != 0:
+                                    row = sun_ms[gi, si, b]
+                                    for n in range(m):
+                                        acc[n] += w * row[n0 + n]
+                            for b in range(Bk):
+                                w = wsky[j, u, v, b]
+                                if w != 0:
+                                    for c in range(4):
+                                        rc = sky_ms[gi, si, c, b]
+                                        for n in range(m):
+                                            acc_k[c, n] += w * rc[n0 + n]
+                    for n in range(m):
+                        q = n0 + n
+                        t = w0 * s_T[s0, q] + w1 * s_T[s1, q]
+                        gl = acc_k[3, n]
+                        for c in range(3):
+                            out[j, q, c] = (acc[n] * c_in[j, c] + a_sky[j, c] * acc_k[c, n] + G[j, c] * gl
+                                            + t * sky[q, c])
+        _KERNEL = kernel
+    return _KERNEL
+
+
+
+
+def weights(tables, p: dict, P: int):
+    """Per individual: the (e, g) brackets and the band weights of the all-orders composition.
+
+    Returns sidx, gidx (P, 2), ws (P, 2), wsun (P, 2, 2, B) = w_g w_s L_in c_b(beta), wsky (P, 2, 2, B')
+    = w_g w_s c'_b(beta), a (P, 3) the dome's calibration, G (P, 3) the ground radiance."""
+    from natscene.scatter.bands import band_weights
+    sig = np.asarray(tables.extinction, np.float64)
+    gs = np.asarray(tables.g, np.float64)
+    sb, kb = tables.sun_bands, tables.sky_bands
+    si, fs = brackets(sig, p["extinction"])
+    gi, fg = brackets(gs, p["g"])
+    sidx = np.stack([si, np.minimum(si + 1, sig.size - 1)], 1)
+    gidx = np.stack([gi, np.minimum(gi + 1, gs.size - 1)], 1)
+    ws = np.stack([1.0 - fs, fs], 1).astype(np.float32)
+    wsun = np.zeros((P, 2, 2, len(sb)), np.float32)
+    wsky = np.zeros((P, 2, 2, len(kb)), np.float32)
+    sun_r, sky_r = np.asarray(tables.sun_ratios), np.asarray(tables.sky_ratios)
+    for u, wg in enumerate((1.0 - fg, fg)):
+        for v, wsv in enumerate((1.0 - fs, fs)):
+            w = wg * wsv                                               # (P,)
+            g_n, s_n = gidx[:, u], sidx[:, v]
+            wsun[:, u, v] = (w * p["L_in"])[:, None] * band_weights(sb, sun_r[g_n, s_n], p["beta"])
+            wsky[:, u, v] = w[:, None] * band_weights(kb, sky_r[g_n, s_n], p["beta"])
+    sl = tables.meta.get("skylight", {})
+    a = rgb_per_individual(p, "sky_scale", P, 1.0)
+    albedo = rgb_per_individual(p, "ground_albedo", P, DEFAULT_GROUND_ALBEDO)
+    e_dome = np.asarray(sl.get("irradiance_rgb", [0.0, 0.0, 0.0]), np.float64)
+    sin_el = max(float(sl.get("sun_elevation_sin", 0.0)), 0.0)
+    G = albedo / np.pi * (p["L_in"][:, None] * p["c_in"] * sin_el + a * e_dome[None])
+    return sidx, gidx, ws, wsun, wsky, a, G.astype(np.float32)
+
+
+def _compose(tables, p: dict, P: int, arrays, cos_t, sky, N: int, backend: str) -> np.ndarray:
+    """L_c (P, N, 3) of the all-orders transport; ``arrays`` = (S_sun (Ns, N), T (Ns, N), sun (Ng, Ns, B, N),
+    sky (Ng, Ns, 4, B', N))."""
+    s_sun, s_T, sun_ms, sky_ms = arrays
+    sidx, gidx, ws, wsun, wsky, a, G = weights(tables, p, P)
+    a_sun = (p["L_in"] * p["beta"]).astype(np.float32)
+    c_in = p["c_in"].astype(np.float32)
+    out = np.empty((P, N, 3), np.float32)
+    if _nb is not None and backend != "numpy":
+        _kernel()(s_sun, s_T, sun_ms, sky_ms, np.asarray(cos_t, np.float32),
+                                   np.ascontiguousarray(sky, np.float32), sidx, ws, gidx, wsun, wsky,
+                                   p["g"].astype(np.float32), a_sun, c_in, a, G, out)
+        return out
+    for j in range(P):
+        g = float(p["g"][j])
+        denom = np.float32(1.0 + g * g) - np.float32(2.0 * g) * cos_t
+        phase = np.float32((1.0 - g * g) * INV_4PI) / (denom * np.sqrt(denom))
+        acc = a_sun[j] * phase * (ws[j, 0] * s_sun[sidx[j, 0]] + ws[j, 1] * s_sun[sidx[j, 1]])
+        acc_c = np.zeros((3, N), np.float32)
+        for u in range(2):
+            for v in range(2):
+                gi, si = gidx[j, u], sidx[j, v]
+                if wsun[j, u, v].any():
+                    acc += wsun[j, u, v] @ sun_ms[gi, si]
+                if wsky[j, u, v].any():
+                    k = np.tensordot(wsky[j, u, v], sky_ms[gi, si], axes=(0, 1))    # (4, N)
+                    acc_c += a[j][:, None] * k[:3] + G[j][:, None] * k[3][None]
+        t = ws[j, 0] * s_T[sidx[j, 0]] + ws[j, 1] * s_T[sidx[j, 1]]
+        out[j] = (acc[:, None] * c_in[j][None] + acc_c.T + t[:, None] * sky).astype(np.float32)
+    return out
+
+
+
+
+def check_noise_target(settings) -> None:
+    """``noise_target`` is (median, p95) in [0, 1] and ``max_budget_scale`` >= 1, else InputError naming the key."""
+    t = tuple(settings.noise_target)
+    if len(t) != 2 or not all(0.0 <= float(x) <= 1.0 for x in t):
+        raise InputError(f"config key 'precompute.all_orders.noise_target': needs [median, p95] in [0, 1], got {list(t)}")
+    if not float(settings.max_budget_scale) >= 1.0:
+        raise InputError(f"config key 'precompute.all_orders.max_budget_scale': must be >= 1, "
+                         f"got {settings.max_budget_scale}")
+
+
+def _tag(x: float) -> str:
+    return f"{float(x):g}"
+
+
+def _names(sun_bands, sky_bands, gs, extinctions) -> list[str]:
+    sig = [_tag(s) for s in extinctions]
+    gt = [_tag(g) for g in gs]
+    names = [f"sun.b{b}.g{g}.e{s}" for b in range(len(sun_bands)) for g in gt for s in sig]
+    names += [f"sky.{c}.b{b}.g{g}.e{s}" for c in SKY_CHANNELS for b in range(len(sky_bands))
+              for g in gt for s in sig]
+    return names
+
+
+class AllOrders(Transport):
+    """Every order of the sun's light and the skylight (see the module docstring)."""
+
+    name = "all_orders"
+    fit_params = ("L_in", "g", "extinction", "beta")
+    tables_file = "allorders.exr"
+
+    def validate(self, settings) -> None:
+        if settings is not None:
+            check_noise_target(settings)
+
+    def describe(self, section: dict) -> str:
+        from natscene.scatter.allorders import settings_from_config
+        st = settings_from_config(section)
+        return f"{st.sun_collisions:.3g} + {st.sky_collisions:.3g} photon collisions per node"
+
+    def preview_rows(self, tables, si: int, gis: list) -> list:
+        """The sun's multiple scattering (every order >= 2) and the skylight (the dome's R, G, B, in colour), both
+        at beta 0.99."""
+        from natscene.scatter.bands import band_weights
+        sun, sky = [], []
+        for gi in gis:
+            w = band_weights(tables.sun_bands, tables.sun_ratios[gi, si], 0.99)[0]
+            sun.append(("sun all orders", np.tensordot(w, tables.sun_ms[:, gi, si], 1)))
+            w = band_weights(tables.sky_bands, tables.sky_ratios[gi, si], 0.99)[0]
+            sky.append(("sky all orders", np.moveaxis(np.tensordot(w, tables.sky_ms[:3, :, gi, si], (0, 1)), 0, -1)))
+        return [sun, sky]
+
+    def values_per_node(self, section: dict) -> int:
+        ao = section.get("all_orders") or {}
+        return len(ao.get("sun_bands") or [0] * 8) + 4 * len(ao.get("sky_bands") or [0] * 3)
+
+    def memory_model(self, rule: str) -> str:
+        return f"{rule}_all_orders" if rule in ("precompute", "fit", "render_frame") else rule
+
+    def precompute(self, volume, med, camera, sigmas, gs, single, *, settings=None, skylight=None, n_m=4,
+                   spp=256, seed=0, batch_spp=None, with_error=True, log=None):
+        from natscene.scatter.allorders import AllOrdersSettings
+        settings = settings if settings is not None else AllOrdersSettings()
+        sun_ms, sky_ms, sun_r, sky_r, meta = _multiple(volume, camera, med.sun_dir, sigmas, gs, settings, skylight,
+                                                       seed, log or (lambda msg: None), single)
+        fields = {"orders": [], "sun_bands": tuple(settings.sun_bands), "sky_bands": tuple(settings.sky_bands),
+                  "sun_ms": sun_ms, "sky_ms": sky_ms, "sun_ratios": sun_r, "sky_ratios": sky_r}
+        return fields, meta
+
+    def save(self, directory, tables, attrs: dict) -> None:
+        H, W = tables.t_c.shape
+        data = np.concatenate([tables.sun_ms.reshape(-1, H, W), tables.sky_ms.reshape(-1, H, W)])
+        scale = data.reshape(len(data), -1).max(1).astype(np.float64)
+        scale[scale <= 0] = 1.0
+        # each channel divided by its maximum: half floats then keep 4.9e-4 relative precision over 14 octaves
+        write_exr(f"{directory}/{self.tables_file}", (data / scale[:, None, None]).transpose(1, 2, 0),
+                  _names(tables.sun_bands, tables.sky_bands, tables.g, tables.extinction),
+                  attrs={**attrs, "channel_scale": scale.tolist()}, half=True, stage="precompute")
+
+    def load(self, directory, meta: dict, extinctions, gs, orders, shape) -> dict:
+        H, W = shape
+        sb = tuple((int(a), None if e is None else int(e)) for a, e in meta["sun_bands"])
+        kb = tuple((int(a), None if e is None else int(e)) for a, e in meta["sky_bands"])
+        path = f"{directory}/{self.tables_file}"
+        ao = read_exr(path)
+        names = _names(sb, kb, gs, extinctions)
+        scale = np.asarray(ao.attrs.get("channel_scale"), np.float64)
+        if scale.size != len(names):
+            raise InputError(f"{path}: channel scales missing; rerun the precompute rule")
+        stack = np.moveaxis(ao.channel(*names).reshape(H, W, -1), -1, 0)
+        data = stack.astype(np.float32) * scale[:, None, None].astype(np.float32)
+        n_sun = len(sb) * len(gs) * len(extinctions)
+        return {"sun_bands": sb, "sky_bands": kb,
+                "sun_ms": np.ascontiguousarray(data[:n_sun].reshape(len(sb), len(gs), len(extinctions), H, W)),
+                "sky_ms": np.ascontiguousarray(data[n_sun:].reshape(4, len(kb), len(gs), len(extinctions), H, W)),
+                "sun_ratios": np.asarray(meta["sun_ratios"], np.float64),
+                "sky_ratios": np.asarray(meta["sky_ratios"], np.float64)}
+
+    def compose(self, tables, p: dict, P: int, arrays: Arrays, sky: np.ndarray, backend: str) -> np.ndarray:
+        return _compose(tables, p, P, (arrays.s_sun, arrays.T, arrays.sun_ms, arrays.sky_ms), arrays.cos_t,
+                        sky, arrays.n, backend)
+
+    def render(self, volume, med, camera, sigma: float, single: dict, cos_t, p: dict, sky,
+               options: RenderOptions):
+        H, W = camera.height, camera.width
+        g, beta, L_in = float(p["g"][0]), float(p["beta"][0]), float(p["L_in"][0])
+        c_in = p["c_in"][0].astype(np.float32)
+        o = options
+        all_orders, step_voxels, supersample, seed = o.all_orders, o.step_voxels, o.supersample, o.seed
+        sun_collisions, sky_collisions, tally_rate = o.sun_collisions, o.sky_collisions, o.tally_rate
+        ground_share, camera_lobe, skylight, dome = o.ground_share, o.camera_lobe, o.skylight, o.dome
+        sky_settings, ground_albedo = o.sky_settings, o.ground_albedo
+        comps = {}
+        from natscene.scatter.allorders import AllOrdersSettings, Lighting, Scene, view_images
+        from natscene.scatter.bands import band_weights
+        from natscene.scatter.skylight import ground_radiance, irradiance
+        from dataclasses import replace
+        st = replace(all_orders if all_orders is not None else AllOrdersSettings(), step_voxels=step_voxels,
+                     supersample=supersample)
+        if sun_collisions is not None:
+            st.sun_collisions = int(sun_collisions)
+        if sky_collisions is not None:
+            st.sky_collisions = int(sky_collisions)
+        if tally_rate is not None:
+            st.tally_rate = float(tally_rate)
+        if ground_share is not None:
+            st.p_ground = float(ground_share)
+        st.camera_lobe = float(camera_lobe)
+        st.sun_photons_max = max(st.sun_photons_max, st.sun_collisions // 2)
+        st.sky_photons_max = max(st.sky_photons_max, st.sky_collisions // 2)
+        if skylight:
+            dome = dome if dome is not None else frame_dome(med.sun_dir, sky_settings)
+        else:
+            dome = None
+        scene = Scene(volume, Lighting(med.sun_dir, dome), st)
+        vi = view_images(scene, camera, sigma, g, seed=seed)
+        a_s = L_in * beta * hg(cos_t, g) * single["S_sun"][0]
+        a_m = L_in * np.tensordot(band_weights(st.sun_bands, vi.sun_ratios, beta)[0], vi.sun, 1)
+        L_sky_lit = np.zeros((H, W, 3), np.float32)
+        if dome is not None:
+            ck = band_weights(st.sky_bands, vi.sky_ratios, beta)[0]
+            sky_bands = np.tensordot(ck, np.moveaxis(vi.sky, 1, 0), 1)          # (4, H, W)
+            sin_el = max(float(med.sun_dir[1]), 0.0)
+            G = ground_radiance(np.broadcast_to(np.asarray(ground_albedo, np.float64), (3,)),
+                                L_in * c_in * sin_el, irradiance(dome))
+            L_sky_lit = (np.moveaxis(sky_bands[:3], 0, -1)
+                         + sky_bands[3][..., None] * G[None, None, :].astype(np.float32))
+        L_s = a_s[..., None].astype(np.float32) * c_in
+        L_m = a_m[..., None].astype(np.float32) * c_in
+        comps.update(L_sky_lit=L_sky_lit.astype(np.float32), photons=vi.stats)
+        cloud = L_s + L_m + L_sky_lit
+        comps.update(L_s=L_s, L_m=L_m)
+        return cloud, comps
+
+    def fit_fixed(self, tables, sky, settings, log) -> dict:
+        """The sky dome calibrated to the photo's L_sky and the ground's albedo (``fit.skylight``,
+        ``fit.ground_albedo``); the sun alone (zeros) with ``fit.skylight: false``."""
+        from natscene.scatter.skylight import calibration
+        view_mean = tables.meta.get("skylight", {}).get("view_mean_rgb")
+        if view_mean is None:
+            raise InputError("the precompute's meta.yaml has no skylight.view_mean_rgb; rerun the precompute rule")
+        fixed = {"sky_scale": calibration(np.asarray(sky, np.float64).reshape(-1, 3).mean(0), view_mean),
+                 "ground_albedo": np.broadcast_to(np.asarray(settings.ground_albedo, np.float64), (3,))}
+        if not settings.skylight:        # the sun alone lights the cloud
+            fixed = {"sky_scale": np.zeros(3), "ground_albedo": np.zeros(3)}
+        log(f"all-orders transport: the sky dome calibrated to the photo's L_sky by "
+            f"{np.round(fixed['sky_scale'], 4).tolist()}, ground albedo {fixed['ground_albedo'].tolist()}")
+        return fixed
