@@ -2,7 +2,7 @@
 results/benchmarks/transport_experiments.json and contact sheets under results/benchmarks/.
 
 1. Dobashi Fig. 5, harder: the target is a Mitsuba 3 ``volpath`` render of every scattering order of the main
-   job's cumulus (kite view, g 0.85, beta 0.999, known L_in and extinction) over the kite photo's sky, not our own
+   job's cumulus (kite view, g 0.85, beta 0.9999, known L_in and extinction) over the kite photo's sky, not our own
    renderer. Both models fit it (``--seeds`` GA runs each, n_max = 100): O and the recovered parameters
    against the true ones.
 2. The kite photo: both models, ``--seeds`` GA runs each; O and the fitted parameters; the contact sheets of
@@ -27,7 +27,7 @@ from _common import ROOT, write_result
 
 import natscene  # noqa: F401
 
-TRUE = {"L_in": 4.0, "g": 0.85, "extinction": 0.1, "beta": 0.999}   # extinction in 1/m
+TRUE = {"L_in": 4.0, "g": 0.85, "extinction": 0.05, "beta": 0.9999}   # extinction in 1/m (water droplets: beta 0.9999)
 
 
 def stats(x):

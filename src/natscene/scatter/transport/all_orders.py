@@ -80,9 +80,12 @@ def sky_luminance_weights(sun_dir, dome) -> np.ndarray:
 
 def target_figure(noise: dict) -> tuple[float, float]:
     """The figure a node's noise target is checked against (``precompute.all_orders.noise_target``): of the
-    per-pixel relative standard errors of :func:`node_noise`, the sun and sky composed together, the median and
-    the p95 over the cloud pixels, each the worst of the betas."""
-    e = [v for k, v in noise.items() if k.startswith("sun_and_sky.") and v.size]
+    per-pixel standard errors of :func:`node_noise`, the sun's and the sky's multiple scattering composed together,
+    relative to the composed cloud pixel (single scattering included: the image the GA sees), the median and the
+    p95 over the cloud pixels, each the worst of the betas. Relative to the multiple scattering alone, the thin
+    nodes of a physical extinction grid (where it is a small part of the pixel) would take most of the photons
+    for noise the image does not show."""
+    e = [v for k, v in noise.items() if k.startswith("pixel.") and v.size]
     return tuple(max((float(np.percentile(v, q)) for v in e), default=0.0) for q in (50, 95))
 
 

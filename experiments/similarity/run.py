@@ -1,0 +1,81 @@
+"""First-order similarity for the high orders of the all-orders transport: time and error against volpath.
+
+Applies ``similarity.patch`` (a photon from order ``similarity_order`` on, optionally only deeper than
+``similarity_depth`` optical depths from the camera, walks the similar medium: extinction (1 - g) mu_t,
+isotropic scattering, its tallies and order count scaled by 1 / (1 - g); Zhao, Wu, Ramamoorthi & Bala 2014 use
+such relations for the high orders) and traces the sun's light through the blob of tests/test_transport.py at
+12 M collisions, against the stored 8192-spp Mitsuba volpath renders (tests/data/transport_volpath.npz):
+
+    git apply experiments/similarity/similarity.patch
+    .venv/bin/python experiments/similarity/run.py 0:0,16:0,8:0,4:0,4:3,4:5,8:3
+    git apply -R experiments/similarity/similarity.patch
+
+Each argument is ``order:depth`` (0:0 is the exact walk). Printed per case: seconds, photons, the mean ratio to
+volpath over the cloud, the range of the 8x8 block ratios, the median relative half-difference of two halves.
+"""
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from natscene.geometry import Camera
+from natscene.phase import hg
+from natscene.scatter.allorders import AllOrdersSettings, Lighting, Scene, view_images
+from natscene.scatter.bands import band_weights
+from natscene.scatter.single import march_view
+from natscene.volume.grid import Volume, placement
+
+ROOT = Path(__file__).resolve().parents[2]
+SUN = np.array([0.5, 0.6, 0.3]) / np.linalg.norm([0.5, 0.6, 0.3])
+CAM = Camera((0.0, 0.25, -1.8), (0.0, 0.28, 0.0), fov=30, width=48, height=36)
+CASES = [(1.0, 0.85, 0.999), (0.5, 0.85, 0.999), (1.0, 0.0, 0.999)]     # sigma_t (x 80 /unit), g, beta
+
+
+def blob(scale=80.0, n=(48, 32, 48)):
+    """The procedural heap of tests/test_transport.py (optical depth ~40 through its middle at sigma_t 1)."""
+    nx, ny, nz = n
+    lo, hi = placement((nx, ny, nz))
+    z, y, x = np.meshgrid(np.linspace(-1, 1, nz), np.linspace(0, 1, ny), np.linspace(-1, 1, nx), indexing="ij")
+    d = np.clip(1 - (x ** 2 + ((y - 0.45) / 0.5) ** 2 + z ** 2) / 0.6, 0, 1).astype(np.float32)
+    return Volume(d, lo, hi, scale)
+
+
+def block_ratios(ours, ref, mask, size=8):
+    out = []
+    for i in range(0, ref.shape[0] - size + 1, size):
+        for j in range(0, ref.shape[1] - size + 1, size):
+            if mask[i:i + size, j:j + size].mean() >= 0.5:
+                out.append(ours[i:i + size, j:j + size].sum() / ref[i:i + size, j:j + size].sum())
+    return np.array(out)
+
+
+def main(args):
+    vol = blob()
+    refs = np.load(ROOT / "tests" / "data" / "transport_volpath.npz")
+    for cfg in args:
+        order, depth = (float(v) for v in cfg.split(":"))
+        extra = dict(similarity_order=int(order), similarity_depth=depth) if order > 0 else {}
+        st = AllOrdersSettings(sun_collisions=12_000_000, sky_collisions=200_000, fine_voxels=1, coarse_voxels=1,
+                               camera_lobe=0.6, **extra)
+        scene = Scene(vol, Lighting(SUN, None), st)
+        for s, g, b in CASES:
+            t0 = time.perf_counter()
+            vi = view_images(scene, CAM, s, g, seed=3)
+            dt = time.perf_counter() - t0
+            single = march_view(scene.med, CAM, [s])
+            s1 = b * hg(CAM.ray_directions() @ SUN, g) * single["S_sun"][0]
+            c = band_weights(st.sun_bands, vi.sun_ratios, b)[0]
+            img, ha, hb = (s1 + np.tensordot(c, x, 1) for x in (vi.sun, vi.sun_halves[0], vi.sun_halves[1]))
+            ref = refs[f"s{s:g}_g{g:g}_b{b:g}"]
+            ref = ref[..., 0] if ref.ndim == 3 else ref
+            m = (single["footprint"] > 0) & (ref > 0)
+            blk = block_ratios(img, ref, m)
+            half = np.median(np.abs(ha - hb)[m] / 2 / img[m])
+            print(f"similarity {cfg:>5s}  sigma_t {s} g {g}: {dt:5.1f} s, {vi.stats['sun_photons']} photons, "
+                  f"mean {img[m].mean() / ref[m].mean():.4f}, blocks {blk.min():.3f}..{blk.max():.3f}, "
+                  f"half-difference {half:.4f}", flush=True)
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:] or ["0:0", "16:0", "8:0", "4:0", "4:3", "4:5", "8:3"])
