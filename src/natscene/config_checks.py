@@ -220,17 +220,10 @@ def _check_precompute(p, config):
 
 def _check_fit_extinction(p, config):
     """fit.ranges.extinction in the physical range and covered by precompute.extinction (the fit's tables)."""
-    from natscene.errors import InputError
-    from natscene.fit.genetic import DEFAULT_RANGES
-    from natscene.fit.keyframe import check_extinction_range
-    from natscene.scatter.tables import DEFAULT_EXTINCTIONS
-    rng = ((config.get("fit") or {}).get("ranges") or {}).get("extinction", DEFAULT_RANGES["extinction"])
-    grid = (config.get("precompute") or {}).get("extinction", DEFAULT_EXTINCTIONS)
-    try:
-        check_extinction_range(rng, grid)
-    except InputError as e:
-        msg = str(e)
-        p.add("fit.ranges.extinction", msg.split("': ", 1)[-1] if msg.startswith("config key") else msg)
+    from natscene.fit.keyframe import extinction_range_problem
+    why = extinction_range_problem(config["fit"]["ranges"]["extinction"], config["precompute"]["extinction"])
+    if why:
+        p.add("fit.ranges.extinction", why)
 
 
 def _check_keyframes(p, config):

@@ -43,21 +43,28 @@ def effective_ranges(settings: dict | FitSettings, tables, log=None) -> dict:
     return ranges
 
 
-def check_extinction_range(fit_range, grid) -> None:
-    """``fit.ranges.extinction`` (1/m, searched on a log scale) lies inside the physical range
-    (:data:`natscene.scatter.tables.EXTINCTION_RANGE`) and inside the precompute's extinction grid, else
-    InputError naming the config keys."""
+def extinction_range_problem(fit_range, grid) -> str | None:
+    """What is wrong with ``fit.ranges.extinction`` (1/m, searched on a log scale), or None: it must lie inside the
+    physical range (:data:`natscene.scatter.tables.EXTINCTION_RANGE`) and inside the precompute's extinction
+    grid."""
     from natscene.scatter.tables import EXTINCTION_RANGE
     lo, hi = (float(x) for x in fit_range)
     plo, phi = EXTINCTION_RANGE
     if not plo <= lo <= hi <= phi:
-        raise InputError(f"config key 'fit.ranges.extinction': [{lo:g}, {hi:g}] /m must lie in the physical range "
-                         f"[{plo:g}, {phi:g}] /m (haze ~0.002, cumulus 0.02-0.15, a storm core ~0.3) with min <= max")
+        return (f"[{lo:g}, {hi:g}] /m must lie in the physical range [{plo:g}, {phi:g}] /m (haze ~0.002, cumulus "
+                f"0.02-0.15, a storm core ~0.3) with min <= max")
     glo, ghi = float(np.min(grid)), float(np.max(grid))
     if lo < glo or hi > ghi:
-        raise InputError(f"config key 'fit.ranges.extinction': [{lo:g}, {hi:g}] /m is not covered by the "
-                         f"precompute's nodes (config key 'precompute.extinction': [{glo:g}, {ghi:g}] /m); add "
-                         f"nodes or narrow the range")
+        return (f"[{lo:g}, {hi:g}] /m is not covered by the precompute's nodes (config key 'precompute.extinction': "
+                f"[{glo:g}, {ghi:g}] /m); add nodes or narrow the range")
+    return None
+
+
+def check_extinction_range(fit_range, grid) -> None:
+    """:func:`extinction_range_problem` as an InputError naming ``fit.ranges.extinction``."""
+    why = extinction_range_problem(fit_range, grid)
+    if why:
+        raise InputError(f"config key 'fit.ranges.extinction': {why}")
 
 
 def optical_depths(extinction: float, columns: dict | None) -> dict:

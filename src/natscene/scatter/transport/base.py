@@ -17,6 +17,7 @@ through the cloud (Eq. 9) and the atmosphere (Eq. 3), is common to all and lives
 """
 from __future__ import annotations
 
+from abc import ABC, abstractmethod
 from dataclasses import dataclass
 
 import numpy as np
@@ -51,73 +52,74 @@ class Arrays:
 
 @dataclass
 class RenderOptions:
-    """The settings of a direct render (:func:`natscene.scatter.render.render`'s keywords) that the transports
-    read: ``orders``, ``spp``, ``batch_spp`` (dobashi); the rest all_orders' (see ``render``)."""
+    """The settings of a direct render that the transports read: :func:`natscene.scatter.render.render`'s keywords
+    (its defaults are the only ones): ``orders``, ``spp``, ``batch_spp`` (dobashi); the rest all_orders'."""
 
-    seed: int = 0
-    step_voxels: float = 0.5
-    supersample: int = 4
-    orders: int = 4
-    spp: int = 64
-    batch_spp: int | None = None
-    sky_settings: dict | None = None
-    dome: object = None
-    ground_albedo: object = 0.2
-    sun_collisions: int | None = None
-    sky_collisions: int | None = None
-    skylight: bool = True
-    all_orders: object = None
-    tally_rate: float | None = None
-    ground_share: float | None = None
-    camera_lobe: float = 0.0
+    seed: int
+    step_voxels: float
+    supersample: int
+    orders: int
+    spp: int
+    batch_spp: int | None
+    sky_settings: dict | None
+    dome: object
+    ground_albedo: object
+    sun_collisions: int | None
+    sky_collisions: int | None
+    skylight: bool
+    all_orders: object
+    tally_rate: float | None
+    ground_share: float | None
+    camera_lobe: float
 
 
-class Transport:
+class Transport(ABC):
     """One transport model (see the module docstring). Subclasses set ``name``, ``fit_params``,
-    ``tables_file`` and implement the methods."""
+    ``tables_file`` and implement the abstract methods."""
 
     name: str = ""
     fit_params: tuple = ()
     tables_file: str = ""
 
     def validate(self, settings) -> None:
-        """Raise InputError naming the config key of a bad setting of this transport, before any work."""
+        """Raise InputError naming the config key of a bad setting of this transport, before any work (none by
+        default)."""
 
+    @abstractmethod
     def describe(self, section: dict) -> str:
         """One line for the precompute's log: this transport's effort settings of a ``precompute`` section."""
-        raise NotImplementedError
 
+    @abstractmethod
     def precompute(self, volume, med, camera, sigmas, gs, single, *, settings=None, skylight=None, n_m=4,
                    spp=256, seed=0, batch_spp=None, with_error=True, log=None) -> tuple[dict, dict]:
         """(the :class:`natscene.scatter.tables.Tables` fields of this transport, its meta) over the grid of unitless
         ``sigmas`` (extinction / extinction_scale) and ``gs``; ``single``: the grid's ray march."""
-        raise NotImplementedError
 
+    @abstractmethod
     def save(self, directory, tables, attrs: dict) -> None:
         """Write :attr:`tables_file` of ``tables``."""
-        raise NotImplementedError
 
+    @abstractmethod
     def load(self, directory, meta: dict, extinctions, gs, orders, shape) -> dict:
         """The Tables fields :meth:`save` wrote (read back from ``directory``)."""
-        raise NotImplementedError
 
+    @abstractmethod
     def compose(self, tables, p: dict, P: int, arrays: Arrays, sky: np.ndarray, backend: str) -> np.ndarray:
         """L_c of Eq. 4 (P, N, 3) at the N pixels of ``arrays`` for the population ``p`` (``sky`` (N, 3))."""
-        raise NotImplementedError
 
+    @abstractmethod
     def render(self, volume, med, camera, sigma: float, single: dict, cos_t, p: dict, sky,
                options: RenderOptions) -> tuple[np.ndarray, dict]:
         """(the cloud's light L_s + L_m (+ the skylight) (H, W, 3), components) at one parameter set ``p``."""
-        raise NotImplementedError
 
+    @abstractmethod
     def preview_rows(self, tables, si: int, gis: list) -> list:
         """Rows of the precompute's contact sheet (:mod:`natscene.scatter.contact`): per row, a (name, image) per g
         node of ``gis``, at the extinction node ``si``."""
-        raise NotImplementedError
 
+    @abstractmethod
     def values_per_node(self, section: dict) -> int:
         """Table images per (g, extinction) node for a ``precompute`` section (the memory model's table size)."""
-        raise NotImplementedError
 
     def memory_model(self, rule: str) -> str:
         """The key of :data:`natscene.resources.MODEL` that models ``rule``'s memory with this transport."""
