@@ -37,11 +37,14 @@ def scene_dict(volume, camera, sun_dir, sigma_t: float, g: float, beta: float, i
     }
     sd = np.asarray(sun_dir, np.float64)
     sd = sd / np.linalg.norm(sd)
+    corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
+    far = float(np.linalg.norm(corners - np.asarray(camera.position, np.float64), axis=1).max())
     d = {
         "type": "scene",
         "integrator": {"type": "volpath", "max_depth": int(max_depth), "rr_depth": 10_000},
         "sensor": {
             "type": "perspective", "fov": float(camera.fov), "fov_axis": "y",
+            "far_clip": max(1e4, 1.01 * far),       # Mitsuba's default far clip is 10 km: a cloud 25 km away
             "to_world": T().look_at(origin=list(map(float, camera.position)), target=list(map(float, camera.look_at)),
                                     up=list(map(float, camera.up))),
             "film": {"type": "hdrfilm", "width": camera.width, "height": camera.height,
