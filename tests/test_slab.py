@@ -1,0 +1,184 @@
+"""Plane-parallel slabs against adding-doubling (iadpython: van de Hulst's method in Prahl's implementation).
+
+A homogeneous slab of optical thickness tau (g, albedo beta, index-matched boundaries). Adding-doubling gives
+the azimuth-averaged reflection and transmission functions R(mu, mu0), T(mu, mu0) (symmetric: reciprocity) and
+from them the reflectance and transmittance (fluxes) for a beam at mu0. Three comparisons, within 2 %:
+
+- isotropic scattering (g = 0), radiance: where the view or the sun is along the normal the field has no
+  azimuthal dependence, so the rendered radiance compares with E mu0 R(mu, mu0) / pi above and
+  E mu0 T(mu, mu0) / pi below (the unscattered beam excluded): the sun at 0 deg seen 30 deg from the zenith /
+  nadir, the sun at 60 deg seen along the normal;
+- g = 0.85, the sun at 0 deg, reflectance and diffuse transmittance: the rendered radiance integrated over each
+  hemisphere (12-point Gauss-Legendre in the view's cos(zenith); the field is symmetric about the normal).
+  Adding-doubling's radiances at g = 0.85 move by up to 8 % between 16, 24 and 32 quadrature angles (its
+  delta-M phase function), its fluxes by 0.1 %: fluxes are the reference here;
+- g = 0.85, the sun at 60 deg, by reciprocity: the reflectance (transmittance) for a beam at mu0 equals the
+  radiance reflected (transmitted) toward mu0 under a uniform sky of unit radiance above the slab, which the
+  transport's skylight renders.
+
+The all-orders transport traces one photon run per (tau, g, light, view) and composes the three albedos in
+closed form (orders >= 2 of the sun and >= 1 of the sky in bands; the sun's order 1 ray-marched), as the
+precompute does. The slab is finite (12 times wider than thick; voxel layers of at most 2 mean free paths, as a
+real cloud's); the camera sees its middle (2 x 2 thicknesses). Values below 1e-3 of the incident scale are
+compared in absolute terms (2e-5): the photons cannot resolve a relative 2 % there.
+"""
+import iadpython as iad
+import numpy as np
+import pytest
+
+import natscene  # noqa: F401
+from natscene.phase import hg
+from natscene.scatter.allorders import AllOrdersSettings, Lighting, Scene, view_images
+from natscene.scatter.bands import band_weights
+from natscene.scatter.single import march_view
+from natscene.scatter.skylight import uniform_dome
+
+from test_transport import _slab, _slab_camera
+
+TAUS = (1.0, 10.0, 100.0, 300.0)
+GS = (0.0, 0.85)
+BETAS = (0.99, 0.9999, 1.0)
+SUNS = {0: (1.0, np.cos(np.radians(30))), 60: (0.5, 1.0)}          # sun zenith -> (mu0, mu of the view)
+SETTINGS = AllOrdersSettings(sun_collisions=4_000_000, sky_collisions=0, fine_voxels=1, coarse_voxels=1,
+                             camera_lobe=0.0, importance=False)
+FLUX = AllOrdersSettings(sun_collisions=1_500_000, sky_collisions=0, fine_voxels=1, coarse_voxels=1,
+                         camera_lobe=0.0, importance=False)     # 12 views per flux: fewer photons per view
+DOME = AllOrdersSettings(sun_collisions=20_000, sky_collisions=4_000_000, fine_voxels=1, coarse_voxels=1,
+                         camera_lobe=0.0, importance=False, sky_lobe_share=0.0)
+_X, _W = np.polynomial.legendre.leggauss(12)
+GL_MU, GL_W = (_X + 1) / 2, _W / 2                  # Gauss-Legendre on [0, 1]
+ABS_FLOOR = 1e-3
+
+
+def _matrices(tau: float, g: float, beta: float):
+    s = iad.Sample(a=beta, b=tau, g=g, d=1.0, n=1.0, n_above=1.0, n_below=1.0, quad_pts=32)
+    R, _, T, _ = s.rt_matrices()
+    nu, w2 = np.asarray(s.nu), np.asarray(s.twonuw)
+    return nu, w2, R, T - np.diag(np.exp(-tau / nu) / w2)          # T without the unscattered beam
+
+
+def adding_doubling(tau: float, g: float, beta: float, mu0: float, mu: float) -> tuple[float, float]:
+    """pi L / E above and below the slab: mu0 R(mu, mu0) and mu0 T(mu, mu0) (cubic in the quadrature angles)."""
+    from scipy.interpolate import CubicSpline
+    nu, _, R, T = _matrices(tau, g, beta)
+    out = []
+    for M in (R, T):
+        col = np.array([CubicSpline(nu, M[i])(mu0) for i in range(len(nu))])   # R(nu_i, mu0)
+        out.append(float(mu0 * CubicSpline(nu, col)(mu)))
+    return out[0], out[1]
+
+
+def adding_doubling_flux(tau: float, g: float, beta: float, mu0: float) -> tuple[float, float]:
+    """Reflectance and diffuse transmittance for a beam at mu0: sum_i 2 nu_i w_i R(nu_i, mu0)."""
+    from scipy.interpolate import CubicSpline
+    nu, w2, R, T = _matrices(tau, g, beta)
+    return float(CubicSpline(nu, w2 @ R)(mu0)), float(CubicSpline(nu, w2 @ T)(mu0))
+
+
+def layers(tau: float) -> int:
+    """Voxel layers across the slab: at most 2 mean free paths each (a real cloud's voxels are 1-2 at the
+    main job's extinction), at least 16."""
+    return max(16, int(np.ceil(tau / 2)))
+
+
+def sun_vector(zenith_deg: float) -> np.ndarray:
+    z = np.radians(zenith_deg)
+    return np.array([-np.sin(z), np.cos(z), 0.0])        # toward the sun; the views' azimuth is +x
+
+
+def sun_radiance(tau: float, g: float, zenith: float, mu: float, above: bool, seed: int,
+                 settings: AllOrdersSettings = SETTINGS) -> dict:
+    """pi L / E of the transport under the sun, per beta, in the middle of the slab seen from cos(zenith) mu."""
+    vol = _slab(tau=tau, n=(48, layers(tau), 48), width=12.0)
+    sun = sun_vector(zenith)
+    cam = _slab_camera(mu, above, res=8)
+    scene = Scene(vol, Lighting(sun, None), settings)
+    vi = view_images(scene, cam, 1.0, g, seed=seed)
+    single = hg(cam.ray_directions() @ sun, g) * march_view(scene.med, cam, [1.0])["S_sun"][0]
+    return {b: float(np.pi * (b * single + np.tensordot(band_weights(settings.sun_bands, vi.sun_ratios, b)[0],
+                                                        vi.sun, 1)).mean()) for b in BETAS}
+
+
+def dome_radiance(tau: float, g: float, mu: float, above: bool, seed: int) -> dict:
+    """L / L_sky of the transport's skylight (orders >= 1) under a uniform sky above the slab, per beta."""
+    vol = _slab(tau=tau, n=(48, layers(tau), 48), width=12.0)
+    cam = _slab_camera(mu, above, res=8)
+    scene = Scene(vol, Lighting(sun_vector(0.0), uniform_dome(1.0)), DOME)
+    vi = view_images(scene, cam, 1.0, g, seed=seed)
+    return {b: float(np.tensordot(band_weights(DOME.sky_bands, vi.sky_ratios, b)[0], vi.sky[0], 1).mean())
+            for b in BETAS}
+
+
+def _close(a: float, b: float) -> bool:
+    if b < ABS_FLOOR:
+        return abs(a - b) <= 2e-5
+    return abs(a / b - 1) <= 0.02
+
+
+def _check(got: dict, refs: dict, label: str):
+    bad = {}
+    for beta in BETAS:
+        print(f"{label} beta {beta}: ours {got[beta]:.5g} adding-doubling {refs[beta]:.5g} "
+              f"ratio {got[beta] / max(refs[beta], 1e-30):.4f}")
+        if not _close(got[beta], refs[beta]):
+            bad[beta] = (round(got[beta], 6), round(refs[beta], 6))
+    assert not bad, bad
+
+
+# What the all-orders transport misses today (issue 39; the measured ratios are in docs/stages/precompute.md,
+# "Thick clouds"): strict xfail, so a change that makes a case pass fails here until its entry goes.
+TRUNCATED = "max_order 4096: the light that needs more collisions to cross the slab is dropped"
+BAND_TAIL = "beta < 1: the bands' geometric order distribution overweights the long walks"
+GAPS = {
+    ("radiance", 10.0, 0, False): "2.5-3.4 % low",
+    ("radiance", 100.0, 0, True): "2 % high (beta >= 0.9999)",
+    ("radiance", 100.0, 60, True): "5 % low at beta 0.99",
+    ("radiance", 100.0, 0, False): TRUNCATED + "; " + BAND_TAIL,
+    ("radiance", 100.0, 60, False): TRUNCATED + "; " + BAND_TAIL,
+    ("radiance", 300.0, 60, True): "6 % low at beta 0.99",
+    ("radiance", 300.0, 0, False): TRUNCATED,
+    ("radiance", 300.0, 60, False): TRUNCATED,
+    ("normal", 1.0, True): "2.8 % low",
+    ("normal", 100.0, True): "4 % high (beta >= 0.9999), 3 % low at beta 0.99",
+    ("normal", 100.0, False): "4-5 % high (beta >= 0.9999); " + BAND_TAIL,
+    ("normal", 300.0, True): "2.4-3 % high (beta >= 0.9999), 6 % low at beta 0.99",
+    ("normal", 300.0, False): TRUNCATED + "; " + BAND_TAIL,
+    ("oblique", 1.0, True): "2.3-2.9 % high",
+    ("oblique", 10.0, False): "9-10 % high",
+    ("oblique", 100.0, True): "34 % low at beta 0.99: " + BAND_TAIL,
+    ("oblique", 100.0, False): "33-40 % high; " + BAND_TAIL,
+    ("oblique", 300.0, True): "44 % low at beta 0.99: " + BAND_TAIL,
+    ("oblique", 300.0, False): TRUNCATED,
+}
+
+
+def _cases(kind: str, keys) -> list:
+    return [pytest.param(*k, marks=pytest.mark.xfail(strict=True, reason=GAPS[(kind, *k)]))
+            if (kind, *k) in GAPS else k for k in keys]
+
+
+@pytest.mark.parametrize("tau, zenith, above",
+                         _cases("radiance", [(t, z, a) for t in TAUS for z in SUNS for a in (True, False)]))
+def test_isotropic_slab_radiance(tau, zenith, above):
+    mu0, mu = SUNS[zenith]
+    got = sun_radiance(tau, 0.0, zenith, mu, above, seed=11)
+    refs = {b: adding_doubling(tau, 0.0, b, mu0, mu)[0 if above else 1] for b in BETAS}
+    _check(got, refs, f"g 0 tau {tau:g} sun {zenith} {'R' if above else 'T'}")
+
+
+@pytest.mark.parametrize("tau, above", _cases("normal", [(t, a) for t in TAUS for a in (True, False)]))
+def test_forward_scattering_slab_flux_normal_sun(tau, above):
+    got = {b: 0.0 for b in BETAS}
+    for k, (mu, w) in enumerate(zip(GL_MU, GL_W)):
+        L = sun_radiance(tau, 0.85, 0.0, float(mu), above, seed=21 + k, settings=FLUX)
+        for b in BETAS:
+            got[b] += 2 * w * mu * L[b]
+    refs = {b: adding_doubling_flux(tau, 0.85, b, 1.0)[0 if above else 1] for b in BETAS}
+    _check(got, refs, f"g 0.85 tau {tau:g} sun 0 {'R' if above else 'T_diffuse'} flux")
+
+
+@pytest.mark.parametrize("tau, above", _cases("oblique", [(t, a) for t in TAUS for a in (True, False)]))
+def test_forward_scattering_slab_flux_oblique_sun(tau, above):
+    got = dome_radiance(tau, 0.85, 0.5, above, seed=31)
+    refs = {b: adding_doubling_flux(tau, 0.85, b, 0.5)[0 if above else 1] for b in BETAS}
+    _check(got, refs, f"g 0.85 tau {tau:g} sun 60 {'R' if above else 'T_diffuse'} flux (reciprocity)")
