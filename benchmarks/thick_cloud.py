@@ -13,6 +13,9 @@ In one run on this machine:
   time and the relative RMSE against the reference over the cloud's pixels (opacity > 0.1), per pixel and for
   8x8-block means, and the ratio to the reference in the opacity bands 0.1-0.5, 0.5-0.9, 0.9-0.99, > 0.99
   (its bias by band, averaged over ``--seeds`` runs);
+- with ``--baseline DIR`` (a checkout of an older version, e.g. ``git worktree add /tmp/base 9c1d408``): that
+  version's forward renderer on the same volume, view and droplets (its unitless sigma_t = extinction /
+  extinction_scale) at its own shot settings, run in a subprocess on its own code: the same figures;
 - ``volpath`` (every order, llvm variant, the same threads) at a few sample counts: time and the same errors;
   the time it needs to reach natscene's error is extrapolated from its own runs (error ~ 1/sqrt(spp), fitted
   over the runs), per pixel and for block means. The speed-up is that time over natscene's.
@@ -22,7 +25,13 @@ Writes results/benchmarks/thick_cloud.json.   nice .venv/bin/python benchmarks/t
 from __future__ import annotations
 
 import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -76,10 +85,65 @@ def bands(img, ref, opacity) -> dict:
             for lo, hi in BANDS}
 
 
+BASELINE_SCRIPT = """
+import json, sys, time
+import numpy as np
+import natscene
+assert natscene.__file__.startswith(json.loads(sys.argv[1])["root"]), natscene.__file__
+from natscene.config import load_yaml_config
+from natscene.geometry import Camera
+from natscene.scatter.render import render
+from natscene.variant import select_variant
+from natscene.volume.grid import Volume
+select_variant(threads=2)
+a = json.loads(sys.argv[1])
+z = np.load(a["scene"])
+vol = Volume(z["density"], z["lo"], z["hi"], float(z["scale"]))
+c = z["camera"]
+cam = Camera(tuple(c[0:3]), tuple(c[3:6]), tuple(c[6:9]), float(c[9]), int(c[10]), int(c[11]))
+shot = dict(load_yaml_config(a["root"] + "/config/config.yaml")["shots"]["day_to_sunset"]["render"])
+p = dict(c_in=[1.0] * 3, L_in=1.0, g=a["g"], sigma_t=a["sigma"], beta=a["beta"], kappa_a=[0.0] * 3,
+         sky_scale=[0.0] * 3, ground_albedo=0.0)
+render(vol, cam, z["sun"], p, np.zeros(3, np.float32), seed=0, skylight=False, **{**shot, "spp": 1})
+out = {}
+for seed in range(a["seeds"]):
+    t0 = time.perf_counter()
+    img = render(vol, cam, z["sun"], p, np.zeros(3, np.float32), seed=seed, skylight=False, **shot)[..., 0]
+    out[f"img{seed}"] = img
+    out[f"t{seed}"] = time.perf_counter() - t0
+np.savez(a["out"], **out)
+"""
+
+
+def baseline_runs(base: Path, vol, cam, sun, sigma, g, beta, seeds: int) -> list:
+    """(seconds, image) of the baseline version's forward renderer, run on its own code in a subprocess."""
+    with tempfile.TemporaryDirectory() as tmp:
+        scene_f, out_f = Path(tmp, "scene.npz"), Path(tmp, "out.npz")
+        np.savez(scene_f, density=np.asarray(vol.density, np.float32), lo=vol.bbox_min, hi=vol.bbox_max,
+                 scale=vol.extinction_scale, sun=np.asarray(sun, np.float64),
+                 camera=np.array([*cam.position, *cam.look_at, *cam.up, cam.fov, cam.width, cam.height]))
+        arg = json.dumps({"scene": str(scene_f), "out": str(out_f), "root": str(base), "g": g, "beta": beta,
+                          "sigma": sigma, "seeds": seeds})
+        subprocess.run([sys.executable, "-c", BASELINE_SCRIPT, arg], check=True,
+                       env={**os.environ, "PYTHONPATH": str(base / "src")})
+        with np.load(out_f) as z:
+            return [(float(z[f"t{s}"]), z[f"img{s}"].astype(np.float64)) for s in range(seeds)]
+
+
+def summary(runs: list, ref, ref_noise, mask, opacity) -> dict:
+    rows = [{"seconds": t, **errors(img, ref, ref_noise, mask), "bands": bands(img, ref, opacity)} for t, img in runs]
+    return {"seconds": float(np.mean([r["seconds"] for r in rows])),
+            "pixel_rmse": float(np.mean([r["pixel"] for r in rows])),
+            "block_rmse": float(np.mean([r["block"] for r in rows])),
+            "mean_ratio": float(np.mean([r["mean_ratio"] for r in rows])),
+            "bands": {k: float(np.mean([r["bands"][k] for r in rows])) for k in rows[0]["bands"]}}
+
+
 def main() -> int:
     ap = argparse.ArgumentParser()
     ap.add_argument("--seeds", type=int, default=2, help="natscene runs per setting")
-    ap.add_argument("--volpath-spp", type=int, nargs="+", default=[4, 16])
+    ap.add_argument("--volpath-spp", type=int, nargs="+", default=[16, 64])
+    ap.add_argument("--baseline", type=Path, help="checkout of the version to compare with (its src/ and config/)")
     a = ap.parse_args()
     from natscene.scatter.allorders import AllOrdersSettings
     from natscene.scatter.mitsuba_scene import render_reference
@@ -101,21 +165,21 @@ def main() -> int:
            "reference_spp": int(np.load(REFS)["cb_day.spp"].sum()),
            "reference_noise_relative": {k: v / ref[mask].mean() for k, v in ref_noise.items()}}
     render(vol, cam, sun, p, np.zeros(3, np.float32), seed=0, skylight=False, **{**shot, "spp": 1})   # compile
+    runs = {}
     for name, st in (("shot_settings", None), ("cells_1_voxel", AllOrdersSettings(fine_voxels=1, coarse_voxels=1))):
-        runs = []
+        runs[name] = []
         for seed in range(a.seeds):
             t0 = time.perf_counter()
             img = render(vol, cam, sun, p, np.zeros(3, np.float32), seed=seed, skylight=False, all_orders=st,
                          **shot)[..., 0]
-            dt = time.perf_counter() - t0
-            runs.append({"seconds": dt, **errors(img, ref, ref_noise, mask), "bands": bands(img, ref, opacity)})
-            print(name, seed, runs[-1], flush=True)
-        res[f"natscene_{name}"] = {
-            "seconds": float(np.mean([r["seconds"] for r in runs])),
-            "pixel_rmse": float(np.mean([r["pixel"] for r in runs])),
-            "block_rmse": float(np.mean([r["block"] for r in runs])),
-            "mean_ratio": float(np.mean([r["mean_ratio"] for r in runs])),
-            "bands": {k: float(np.mean([r["bands"][k] for r in runs])) for k in runs[0]["bands"]}}
+            runs[name].append((time.perf_counter() - t0, img.astype(np.float64)))
+        res[f"natscene_{name}"] = summary(runs[name], ref, ref_noise, mask, opacity)
+        print(name, res[f"natscene_{name}"], flush=True)
+    if a.baseline:
+        runs["baseline"] = baseline_runs(a.baseline, vol, cam, sun, sigma, g, beta, a.seeds)
+        res["natscene_baseline"] = {"version": str(a.baseline),
+                                    **summary(runs["baseline"], ref, ref_noise, mask, opacity)}
+        print("baseline", res["natscene_baseline"], flush=True)
     vp = []
     for spp in a.volpath_spp:
         t0 = time.perf_counter()
@@ -126,7 +190,7 @@ def main() -> int:
     res["volpath"] = vp
     # error^2 * time is constant for an unbiased Monte Carlo renderer: fit it over the runs (seconds per unit of
     # 1/error^2), then the time to reach natscene's error
-    for name in ("shot_settings", "cells_1_voxel"):
+    for name in runs:
         ns = res[f"natscene_{name}"]
         for kind in ("pixel", "block"):
             c = float(np.median([r["seconds"] * r[kind] ** 2 for r in vp]))
