@@ -116,6 +116,10 @@ CASES = [
         position=[1, 1, 1], look_at=[1, 1, 1]), "shots.tiny.keyframes[1].camera", "equals look_at"),
     ("composite camera up parallel", _no_shot(camera={"position": [0, 0, 0], "look_at": [0, -1, 0], "up": [0, 1, 0],
                                                       "fov": 40}), "composite.garden.camera", "parallel"),
+    ("view does not see its volume", lambda c: c["views"]["tiny"]["camera"].update(look_at=[0.0, -2000.0, 0.0]),
+     "views.tiny", "does not see volume 'tiny'"),
+    ("view looks away from its volume", lambda c: c["views"]["tiny"]["camera"].update(look_at=[0.0, 1.7, -6000.0]),
+     "views.tiny", "0 % of the frame"),
     ("view sun below horizon", lambda c: c["views"]["tiny"]["sun"].__setitem__("elevation", -5),
      "views.tiny.sun.elevation", "below the horizon"),
     ("shot sun below horizon", lambda c: c["shots"]["tiny"]["keyframes"][1]["sun"].__setitem__("elevation", -2),
@@ -165,6 +169,16 @@ def test_all_problems_are_reported_at_once(smoke):
     cfg["keyframes"]["tiny"]["photo"] = "nope"
     cfg["views"]["tiny"]["sun"]["elevation"] = -1
     assert len(config_problems(cfg, ROOT)) == 2
+
+
+def test_box_coverage_counts_the_frame_that_meets_the_box():
+    """The share of the frame whose rays meet a box: a box filling the view, half of it, none of it."""
+    from natscene.geometry import Camera, box_coverage
+    cam = Camera((0.0, 0.0, -10.0), (0.0, 0.0, 0.0), fov=40, width=64, height=48)
+    assert box_coverage(cam, (-100, -100, -1), (100, 100, 1)) == 1.0
+    assert box_coverage(cam, (0, -100, -1), (100, 100, 1)) == pytest.approx(0.5, abs=0.02)
+    assert box_coverage(cam, (-1, -1, -30), (1, 1, -20)) == 0.0          # behind the camera
+    assert box_coverage(cam, (-1, 50, -1), (1, 60, 1)) == 0.0            # above the frame
 
 
 def test_camera_problem_geometry():

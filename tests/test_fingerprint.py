@@ -1,6 +1,7 @@
 """Code fingerprints computed from the code (natscene.fingerprint): each rule's fingerprint covers its script's
 whole import closure inside natscene, checked against the standard library's modulefinder (an independent
-bytecode scan), including lazy imports inside functions and importlib.import_module with a literal name."""
+bytecode scan), including lazy imports inside functions and importlib.import_module with a literal name; it
+follows the code's meaning (comments, docstrings and layout do not count)."""
 import modulefinder
 import re
 import shutil
@@ -72,6 +73,32 @@ def test_fingerprint_changes_exactly_with_the_closure(tmp_path):
     assert script_fingerprint(script, pkg) != before
 
 
+def test_comments_docstrings_and_layout_do_not_count(tmp_path):
+    """A comment, a docstring or a reformatting leaves the fingerprint alone; a changed constant does not."""
+    pkg, script = _package(tmp_path)
+    import natscene.fingerprint as fp
+    before = script_fingerprint(script, pkg)
+    (pkg / "dyn.py").write_text('"""The dynamic module."""\n# a comment\nZ   =   2  # two\n')
+    (pkg / "lazy.py").write_text('def f():\n    """Docs."""\n    from natscene.deep import (y)\n\n    return y\n')
+    fp._direct.cache_clear()
+    assert script_fingerprint(script, pkg) == before
+    (pkg / "dyn.py").write_text('"""The dynamic module."""\nZ = 3\n')
+    assert script_fingerprint(script, pkg) != before
+    (pkg / "dyn.py").write_text("Z = 2\n")
+    (pkg / "lazy.py").write_text("def f():\n    from natscene.deep import y\n    return y + 0\n")
+    assert script_fingerprint(script, pkg) != before
+
+
+def test_every_module_of_the_package_has_a_meaning():
+    """meaning() parses every natscene module; a trailing comment does not change it."""
+    from natscene.fingerprint import meaning
+    for f in sorted((ROOT / "src" / "natscene").rglob("*.py")):
+        text = f.read_text()
+        m = meaning(text)
+        assert m.startswith("Module(")
+        assert meaning(text + "\n# trailing comment\n") == m
+
+
 def test_ground_floor_module_reaches_every_script_that_imports_it(tmp_path):
     """Editing natscene/color.py changes the fingerprint of exactly the scripts whose closure holds it."""
     src = tmp_path / "src"
@@ -81,7 +108,7 @@ def test_ground_floor_module_reaches_every_script_that_imports_it(tmp_path):
         before = {s.name: script_fingerprint(s, pkg) for s in SCRIPTS}
         users = {s.name for s in SCRIPTS if f"natscene.{module[:-3]}" in _modulefinder_closure(s, src)}
         f = pkg / module
-        f.write_text(f.read_text() + "\n# an edit\n")
+        f.write_text(f.read_text() + "\n_AN_EDIT = 1\n")
         after = {s.name: script_fingerprint(s, pkg) for s in SCRIPTS}
         changed = {n for n in before if before[n] != after[n]}
         assert changed == users, (module, changed ^ users)

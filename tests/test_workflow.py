@@ -107,13 +107,27 @@ def test_editing_a_volume_module_reruns_the_volume(smoke):
     module = repo / "src" / "natscene" / "volume" / "procedural.py"
     original = module.read_text()
     try:
-        module.write_text(original + "\n# an edit\n")
+        module.write_text(original + "\n_AN_EDIT = 1\n")
         counts = _job_counts(_snake(repo, workdir, "-n").stdout)
         assert counts.get("volume", 0) >= 1, counts
         assert "sky" not in counts
     finally:
         module.write_text(original)
     assert _job_counts(_snake(repo, workdir, "-n").stdout) == {}
+
+
+def test_comment_and_docstring_edits_plan_nothing(smoke):
+    """Fingerprints follow the code's meaning: a comment and a docstring added to natscene/io.py (imported by
+    nearly every script) plan no job."""
+    repo, workdir, _ = smoke
+    module = repo / "src" / "natscene" / "io.py"
+    original = module.read_text()
+    try:
+        module.write_text(original.replace('"""', '"""An edited docstring. ', 1) + "\n# a comment\n")
+        assert module.read_text() != original
+        assert _job_counts(_snake(repo, workdir, "-n").stdout) == {}
+    finally:
+        module.write_text(original)
 
 
 def _rule_scripts(repo: Path) -> dict:
@@ -157,7 +171,7 @@ def test_editing_a_library_module_reruns_exactly_its_importers(smoke, smoke_dag,
     f = repo / "src" / "natscene" / f"{module}.py"
     original = f.read_text()
     try:
-        f.write_text(original + "\n# an edit\n")
+        f.write_text(original + "\n_AN_EDIT = 1\n")
         only_importers = _job_counts(_snake(repo, workdir, "-n", "--allowed-rules", "all", *sorted(expected)).stdout)
         only_others = _job_counts(_snake(repo, workdir, "-n", "--allowed-rules", "all", *sorted(others)).stdout) \
             if others else {}

@@ -226,11 +226,35 @@ def _check_fit_extinction(p, config):
         p.add("fit.ranges.extinction", why)
 
 
+def view_sees_volume_problem(view: dict, spec: dict, volume: str) -> str | None:
+    """Why a view's camera does not see the box of a ``volumes.<name>`` entry, or None (also None for a
+    volume imported from a file without ``size``/``altitude``: its box is known only once it is read)."""
+    from natscene.geometry import Camera, box_coverage
+    from natscene.volume.build import world_box
+    if spec.get("kind", "cumulus") == "file" and spec.get("size") is None and spec.get("altitude") is None:
+        return None
+    if camera_problem(view.get("camera") or {}):
+        return None                                   # reported as its own problem
+    nx, ny, nz = (int(r) for r in spec.get("resolution", [128, 96, 128]))
+    lo, hi = world_box(spec, (nx, ny, nz))
+    cam = Camera.from_view(view)
+    if box_coverage(cam, lo, hi) > 0.0:
+        return None
+    c = view["camera"]
+    return (f"its camera (position {list(c['position'])}, look_at {list(c['look_at'])}, fov {cam.fov:g} deg) does "
+            f"not see volume '{volume}' (box {np.round(lo, 1).tolist()} .. {np.round(hi, 1).tolist()} m): 0 % of "
+            f"the frame meets the box, the precompute would write empty tables; aim the camera at the box")
+
+
 def _check_keyframes(p, config):
     for name, kf in (config.get("keyframes") or {}).items():
         _ref(p, config, f"keyframes.{name}.photo", kf.get("photo"), "photos")
-        _ref(p, config, f"keyframes.{name}.volume", kf.get("volume"), "volumes")
-        _ref(p, config, f"keyframes.{name}.view", kf.get("view"), "views")
+        has_volume = _ref(p, config, f"keyframes.{name}.volume", kf.get("volume"), "volumes")
+        has_view = _ref(p, config, f"keyframes.{name}.view", kf.get("view"), "views")
+        if has_volume and has_view:
+            why = view_sees_volume_problem(config["views"][kf["view"]], config["volumes"][kf["volume"]], kf["volume"])
+            if why:
+                p.add(f"views.{kf['view']}", why)
 
 
 def _check_shots(p, config):

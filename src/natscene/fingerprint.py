@@ -1,9 +1,11 @@
 """Code fingerprints for Snakemake rerun triggers, computed from the code itself.
 
 Snakemake tracks a rule's script but not the library it imports. Every rule passes
-``code=script_fingerprint("<script>.py")`` as a ``param``: a hash of the *content* of every ``natscene``
-module the script can execute, so editing one of them (not merely touching its mtime) makes Snakemake
-rerun exactly the rules that depend on it, and no hand-kept list can drift from the imports.
+``code=script_fingerprint("<script>.py")`` as a ``param``: a hash of the *meaning* of every ``natscene``
+module the script can execute, so changing the code of one of them makes Snakemake rerun exactly the rules that
+depend on it, and no hand-kept list can drift from the imports. The meaning of a module is its syntax tree
+without docstrings (:func:`meaning`: ``ast.dump`` without line numbers), so comments, docstrings and layout do
+not count; the same code on another Python version may dump differently, and then reruns once.
 
 The set of modules (the script's *import closure* inside ``natscene``) is found by parsing the source with
 :mod:`ast`, never by importing it: every ``import natscene.x`` / ``from natscene.x import y`` / relative
@@ -125,15 +127,36 @@ def closure_modules(path: str | Path, package_dir: str | Path = PACKAGE_DIR) -> 
     return sorted(_module_name(f, package_dir) for f in import_closure(path, package_dir))
 
 
-def script_fingerprint(script: str | Path, package_dir: str | Path = PACKAGE_DIR) -> str:
-    """sha256 (16 hex digits) of the content of every natscene file in the script's import closure.
+def _docstring(node) -> bool:
+    body = getattr(node, "body", None)
+    return bool(body) and isinstance(body[0], ast.Expr) and isinstance(body[0].value, ast.Constant) \
+        and isinstance(body[0].value.value, str)
 
-    The script itself is not hashed: Snakemake already tracks a rule's script.
+
+def meaning(source: str) -> str:
+    """The code of a source text without what does not run: its syntax tree with the docstrings of the module,
+    its classes and functions removed, dumped without positions (comments and layout never reach the tree)."""
+    tree = ast.parse(source)
+    for node in ast.walk(tree):
+        if isinstance(node, (ast.Module, ast.ClassDef, ast.FunctionDef, ast.AsyncFunctionDef)) and _docstring(node):
+            node.body = node.body[1:] or [ast.Pass()]
+    return ast.dump(tree, include_attributes=False)
+
+
+@lru_cache(maxsize=None)
+def _file_meaning(path: Path, mtime_ns: int) -> bytes:
+    return meaning(path.read_text()).encode()
+
+
+def script_fingerprint(script: str | Path, package_dir: str | Path = PACKAGE_DIR) -> str:
+    """sha256 (16 hex digits) of the meaning of every natscene file in the script's import closure.
+
+    The script itself is not hashed: Snakemake already tracks a rule's script (by its modification time).
     """
     package_dir = Path(package_dir).resolve()
     h = hashlib.sha256()
     for f in import_closure(script, package_dir):
         h.update(str(f.relative_to(package_dir)).encode())
         h.update(b"\0")
-        h.update(f.read_bytes())
+        h.update(_file_meaning(f, f.stat().st_mtime_ns))
     return h.hexdigest()[:16]

@@ -89,3 +89,14 @@ def ray_box(origins: np.ndarray, dirs: np.ndarray, lo, hi) -> tuple[np.ndarray, 
     tmin = np.nanmax(np.minimum(t0, t1), axis=-1)
     tmax = np.nanmin(np.maximum(t0, t1), axis=-1)
     return np.maximum(tmin, 0.0), tmax
+
+
+def box_coverage(camera: Camera, lo, hi, samples: tuple[int, int] = (64, 48)) -> float:
+    """Share of the camera's frame whose rays meet the axis-aligned box [lo, hi] (rays through a
+    ``samples`` grid of the frame, the camera's aspect and field of view)."""
+    from dataclasses import replace
+    probe = replace(camera, width=int(samples[0]), height=int(samples[1]))
+    d = probe.ray_directions().reshape(-1, 3)
+    o = np.broadcast_to(np.asarray(camera.position, np.float64), d.shape)
+    t0, t1 = ray_box(o, d, lo, hi)
+    return float(np.mean(t1 >= t0))
