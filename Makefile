@@ -12,11 +12,15 @@ setup:
 setup-extras: setup
 	@bash tools/setup-extras.sh
 
+# A killed run is picked up where it stopped: natscene.recover clears the lock it left (when no Snakemake process
+# holds it) and --rerun-incomplete redoes the jobs it interrupted.
 run: setup
-	$(VENV)/bin/snakemake --cores $(CORES) --configfile $(CONFIG) --printshellcmds
+	$(VENV)/bin/python -m natscene.recover
+	$(VENV)/bin/snakemake --cores $(CORES) --configfile $(CONFIG) --printshellcmds --rerun-incomplete
 
 smoke: setup
-	$(VENV)/bin/snakemake --cores $(CORES) --configfile config/smoke.yaml --directory results/smoke
+	$(VENV)/bin/python -m natscene.recover --directory results/smoke
+	$(VENV)/bin/snakemake --cores $(CORES) --configfile config/smoke.yaml --directory results/smoke --rerun-incomplete
 
 test: setup  # without the SLURM tests (minutes each; docs/cluster.md): `pytest -m cluster` runs them
 	$(VENV)/bin/python -m pytest -q -m "not cluster"

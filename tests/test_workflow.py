@@ -205,3 +205,59 @@ def test_forced_rerun_is_byte_identical_and_clears_stale_temp_files(smoke):
     assert set(after) == set(before)
     changed = sorted(k for k in after if after[k] != before[k])
     assert not changed, f"outputs whose bytes changed on a forced rerun: {changed}"
+
+
+def test_a_killed_run_is_recovered_by_one_command(smoke):
+    """kill -9 a forced rerun of the sky mid-job: it leaves a lock and an incomplete job; natscene.recover clears
+    the lock (no Snakemake process holds it) and one run with --rerun-incomplete completes, every output of the
+    workflow byte-identical to the finished run's."""
+    import signal
+    import time
+    from natscene.recover import clear_stale_locks, stale_locks
+    repo, workdir, _ = smoke
+    results = workdir / "results"
+
+    def snapshot():
+        return {p.relative_to(results).as_posix(): p.read_bytes() for p in results.rglob("*")
+                if p.is_file() and p.relative_to(results).parts[0] not in ("logs", "benchmarks")}
+
+    before = snapshot()
+    env = dict(os.environ, PYTHONPATH=str(repo / "src"), PYTHONUNBUFFERED="1")
+    cmd = SNAKEMAKE + ["-s", str(repo / "Snakefile"), "--configfile", str(repo / "config" / "smoke.yaml"),
+                       "--directory", str(workdir), "--cores", "2", "--forcerun", "sky"]
+    proc = subprocess.Popen(cmd, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                            start_new_session=True)
+    t0 = time.time()
+    incomplete = workdir / ".snakemake" / "incomplete"
+    while not (incomplete.is_dir() and any(incomplete.iterdir())):
+        assert proc.poll() is None and time.time() - t0 < 120, "the forced rerun did not start a job"
+        time.sleep(0.2)
+    os.killpg(proc.pid, signal.SIGKILL)
+    proc.wait()
+    assert stale_locks(workdir)
+    removed, live = clear_stale_locks(workdir)
+    assert removed and not live
+    _snake(repo, workdir, "--rerun-incomplete")
+    assert _job_counts(_snake(repo, workdir, "-n").stdout) == {}
+    after = snapshot()
+    assert after.keys() == before.keys()
+    assert [k for k in before if before[k] != after[k]] == []
+
+
+def test_a_live_run_keeps_its_lock(tmp_path):
+    """A lock held by a live Snakemake process (here a stand-in whose command line names snakemake, working in the
+    directory) is left alone; once it is gone the lock is cleared."""
+    from natscene.recover import clear_stale_locks, snakemake_processes
+    locks = tmp_path / ".snakemake" / "locks"
+    locks.mkdir(parents=True)
+    (locks / "0.input.lock").write_text("x")
+    holder = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)", "snakemake"], cwd=tmp_path)
+    try:
+        assert snakemake_processes(tmp_path) == [holder.pid]
+        assert clear_stale_locks(tmp_path) == ([], [holder.pid])
+        assert (locks / "0.input.lock").exists()
+    finally:
+        holder.kill()
+        holder.wait()
+    removed, live = clear_stale_locks(tmp_path)
+    assert removed == [locks / "0.input.lock"] and not live and not (locks / "0.input.lock").exists()
