@@ -83,3 +83,29 @@ def test_metadata_paths_are_relative_to_the_repository(tmp_path):
     other = tmp_path / "elsewhere" / "b.png"
     assert relative_to_root(other, root) == str(other)
     assert relative_to_root(resolve_path(str(other), root), root) == str(other)
+
+
+def test_canonical_sorts_keys_and_writes_numbers_as_the_schema_means():
+    from natscene.config import canonical
+    schema = {"type": "object", "properties": {"a": {"type": "number"}, "n": {"type": "integer"},
+                                               "m": {"type": ["number", "null"]},
+                                               "v": {"type": "array", "items": {"type": "number"}}},
+              "additionalProperties": {"type": "object", "properties": {"x": {"type": "number"}}}}
+    got = canonical({"v": (1, 2.5), "n": 3, "m": 2, "a": 3, "zz": {"x": 1, "b": True}}, schema)
+    assert got == {"a": 3.0, "m": 2.0, "n": 3, "v": [1.0, 2.5], "zz": {"b": True, "x": 1.0}}
+    assert list(got) == ["a", "m", "n", "v", "zz"] and list(got["zz"]) == ["b", "x"]
+    assert isinstance(got["n"], int) and isinstance(got["a"], float) and got["zz"]["b"] is True
+
+
+def test_equivalent_configs_validate_to_the_same_text(smoke):
+    """Reordered keys, written-out defaults and 3 for 3.0 give the same validated config, key order included
+    (Snakemake compares params by their text)."""
+    def rev(node):
+        return {k: rev(node[k]) for k in reversed(list(node))} if isinstance(node, dict) else node
+    raw = load_yaml_config(ROOT / "config" / "smoke.yaml")
+    other = rev(copy.deepcopy(raw))
+    other["precompute"]["skylight"] = {"turbidity": 3, "model": "preetham"}
+    other["fit"]["population"] = 20
+    a = validate_config(copy.deepcopy(raw), SCHEMA)
+    b = validate_config(other, SCHEMA)
+    assert repr(a) == repr(b)

@@ -16,9 +16,9 @@ ROOT = Path(__file__).resolve().parents[1]
 SNAKEMAKE = [sys.executable, "-m", "snakemake"]
 
 
-def _snake(repo: Path, workdir: Path, *args, check=True):
+def _snake(repo: Path, workdir: Path, *args, check=True, configfile: Path | None = None):
     env = dict(os.environ, PYTHONPATH=str(repo / "src"), PYTHONUNBUFFERED="1")
-    cmd = SNAKEMAKE + ["-s", str(repo / "Snakefile"), "--configfile", str(repo / "config" / "smoke.yaml"),
+    cmd = SNAKEMAKE + ["-s", str(repo / "Snakefile"), "--configfile", str(configfile or repo / "config" / "smoke.yaml"),
                        "--directory", str(workdir), "--cores", "2", *args]
     proc = subprocess.run(cmd, env=env, capture_output=True, text=True)
     if check and proc.returncode != 0:
@@ -128,6 +128,31 @@ def test_comment_and_docstring_edits_plan_nothing(smoke):
         assert _job_counts(_snake(repo, workdir, "-n").stdout) == {}
     finally:
         module.write_text(original)
+
+
+def _reversed(node):
+    """The same mapping with every level's keys in reverse order."""
+    if isinstance(node, dict):
+        return {k: _reversed(node[k]) for k in reversed(list(node))}
+    if isinstance(node, list):
+        return [_reversed(v) for v in node]
+    return node
+
+
+def test_equivalent_configs_plan_nothing(smoke, tmp_path):
+    """Params in a canonical form: the smoke config with every mapping's keys reversed, defaults written out
+    (precompute.skylight, fit.population) and a whole number for a float (a view's sun elevation 35 -> 35.0,
+    precompute.skylight.turbidity 3.0 -> 3) plans no job."""
+    import yaml
+    repo, workdir, _ = smoke
+    cfg = yaml.safe_load((repo / "config" / "smoke.yaml").read_text())
+    cfg["precompute"].setdefault("skylight", {}).update(model="preetham", turbidity=3)
+    cfg["fit"].setdefault("population", 20)
+    cfg["views"]["tiny"]["sun"]["elevation"] = float(cfg["views"]["tiny"]["sun"]["elevation"])
+    f = tmp_path / "equivalent.yaml"
+    f.write_text(yaml.safe_dump(_reversed(cfg), sort_keys=False))
+    counts = _job_counts(_snake(repo, workdir, "-n", configfile=f).stdout)
+    assert counts == {}, counts
 
 
 def _rule_scripts(repo: Path) -> dict:

@@ -98,7 +98,39 @@ def validate_config(config: dict, schema: str | os.PathLike, source: str = "conf
         raise ConfigError(f"{source}: invalid configuration: {_describe(errs[0])}") from None
     finally:
         os.unlink(bundled_path)
+    canon = canonical(config, bundled)
+    config.clear()
+    config.update(canon)
     return config
+
+
+def _number_only(schema: dict) -> bool:
+    t = schema.get("type")
+    types = set(t) if isinstance(t, list) else {t}
+    return "number" in types and "integer" not in types
+
+
+def canonical(value, schema: dict | None = None):
+    """The canonical form of a validated config value, so that equivalent configs give equal params (Snakemake
+    compares a rule's params by their text): mappings with their keys sorted, sequences as lists, and a whole
+    number written where the schema asks for a ``number`` as the float it means (``3`` and ``3.0`` alike).
+    Defaults are already filled in by the validation, so a default written out equals one left out."""
+    schema = schema if isinstance(schema, dict) else {}
+    if isinstance(value, dict):
+        props = schema.get("properties") or {}
+        extra = schema.get("additionalProperties")
+        extra = extra if isinstance(extra, dict) else {}
+        patterns = list((schema.get("patternProperties") or {}).values())
+        fallback = extra or (patterns[0] if len(patterns) == 1 else {})
+        return {k: canonical(value[k], props.get(k, fallback)) for k in sorted(value, key=str)}
+    if isinstance(value, (list, tuple)):
+        items = schema.get("items")
+        prefix = schema.get("prefixItems") or []
+        return [canonical(v, prefix[i] if i < len(prefix) else (items if isinstance(items, dict) else {}))
+                for i, v in enumerate(value)]
+    if isinstance(value, int) and not isinstance(value, bool) and _number_only(schema):
+        return float(value)
+    return value
 
 
 def load_yaml_config(path: str | os.PathLike) -> dict:
