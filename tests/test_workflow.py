@@ -61,7 +61,7 @@ def smoke(tmp_path_factory):
     base = tmp_path_factory.mktemp("smoke")
     repo = base / "repo"
     repo.mkdir()
-    for item in ("Snakefile", "workflow", "scripts", "src", "config", "resources"):
+    for item in ("Snakefile", "profiles", "workflow", "scripts", "src", "config", "resources"):
         src = ROOT / item
         (shutil.copytree if src.is_dir() else shutil.copy2)(src, repo / item)
     workdir = base / "run"
@@ -153,6 +153,25 @@ def test_equivalent_configs_plan_nothing(smoke, tmp_path):
     f.write_text(yaml.safe_dump(_reversed(cfg), sort_keys=False))
     counts = _job_counts(_snake(repo, workdir, "-n", configfile=f).stdout)
     assert counts == {}, counts
+
+
+def test_a_forced_rerun_that_writes_the_same_bytes_does_not_cascade(smoke):
+    """--forcerun sky --until sky rewrites the same bytes; the next run plans nothing, because the workflow
+    profile (profiles/default) compares files by content up to a size above the main job's largest sky product.
+    With Snakemake's files compared by time alone (a threshold below their size) the same rewrite cascades."""
+    import OpenImageIO as oiio
+    import yaml
+    repo, workdir, _ = smoke
+    _snake(repo, workdir, "--forcerun", "sky", "--until", "sky")
+    assert _job_counts(_snake(repo, workdir, "-n").stdout) == {}
+    assert _job_counts(_snake(repo, workdir, "-n", "--max-checksum-file-size", "10").stdout) != {}
+    limit = yaml.safe_load((ROOT / "profiles" / "default" / "config.yaml").read_text())["max-checksum-file-size"]
+    main = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
+    for photo in main["photos"].values():
+        inp = oiio.ImageInput.open(str(ROOT / photo["path"]))
+        w, h = inp.spec().width, inp.spec().height
+        inp.close()
+        assert limit > w * h * 3 * 4 * 2, (photo["path"], w, h)      # float32 RGB EXR, uncompressed, twice over
 
 
 def _rule_scripts(repo: Path) -> dict:
