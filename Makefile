@@ -12,11 +12,17 @@ setup:
 setup-extras: setup
 	@bash tools/setup-extras.sh
 
-# A killed run is picked up where it stopped: natscene.recover clears the lock it left (when no Snakemake process
-# holds it) and --rerun-incomplete redoes the jobs it interrupted.
+# CACHE=precompute: Snakemake's between-workflow cache for those rules, in $SNAKEMAKE_OUTPUT_CACHE (default
+# .cache/snakemake here). A killed run is picked up where it stopped: natscene.recover clears the lock it left
+# (when no Snakemake process holds it) and --rerun-incomplete redoes the jobs it interrupted.
+CACHE ?=
+export SNAKEMAKE_OUTPUT_CACHE ?= $(CURDIR)/.cache/snakemake
+
 run: setup
 	$(VENV)/bin/python -m natscene.recover
-	$(VENV)/bin/snakemake --cores $(CORES) --configfile $(CONFIG) --printshellcmds --rerun-incomplete
+	$(if $(CACHE),mkdir -p "$(SNAKEMAKE_OUTPUT_CACHE)")
+	$(VENV)/bin/snakemake --cores $(CORES) --configfile $(CONFIG) --printshellcmds --rerun-incomplete \
+	  $(if $(CACHE),--cache $(CACHE))
 
 smoke: setup
 	$(VENV)/bin/python -m natscene.recover --directory results/smoke

@@ -1,6 +1,7 @@
 # natscene: the workflow. Loads and validates the config, then includes one rule file per stage.
 # Run:  make run            (main job, config/config.yaml)
 #       make smoke          (tiny inputs)
+import os
 import sys
 from pathlib import Path
 
@@ -22,6 +23,13 @@ check_config(config, ROOT, source=_CONFIG_SOURCE)  # cross-references, input fil
 _too_big = _memory_problems(config, ROOT, workflow.global_resources)  # jobs that cannot fit in memory
 if _too_big:
     raise ConfigError(f"{_CONFIG_SOURCE}: {len(_too_big)} job(s) cannot fit in memory:\n  " + "\n  ".join(_too_big))
+
+# Snakemake's between-workflow cache (`--cache precompute`, DESIGN §4) keeps its entries in $SNAKEMAKE_OUTPUT_CACHE;
+# without it Snakemake fails deep inside with a traceback. `make run CACHE=precompute` sets a default folder.
+if getattr(workflow.workflow_settings, "cache", None) is not None and not os.environ.get("SNAKEMAKE_OUTPUT_CACHE"):
+    raise ConfigError("--cache needs the environment variable SNAKEMAKE_OUTPUT_CACHE, the folder the projects that "
+                      "share tables use (e.g. export SNAKEMAKE_OUTPUT_CACHE=~/.cache/natscene); "
+                      "`make run CACHE=precompute` sets it to .cache/snakemake in this repository")
 
 RESULTS = config["results"]
 ALL_TARGETS = []  # each rule file appends the final products it wants built by `rule all`

@@ -16,8 +16,8 @@ ROOT = Path(__file__).resolve().parents[1]
 SNAKEMAKE = [sys.executable, "-m", "snakemake"]
 
 
-def _snake(repo: Path, workdir: Path, *args, check=True, configfile: Path | None = None):
-    env = dict(os.environ, PYTHONPATH=str(repo / "src"), PYTHONUNBUFFERED="1")
+def _snake(repo: Path, workdir: Path, *args, check=True, configfile: Path | None = None, env: dict | None = None):
+    env = dict(env if env is not None else os.environ, PYTHONPATH=str(repo / "src"), PYTHONUNBUFFERED="1")
     cmd = SNAKEMAKE + ["-s", str(repo / "Snakefile"), "--configfile", str(configfile or repo / "config" / "smoke.yaml"),
                        "--directory", str(workdir), "--cores", "2", *args]
     proc = subprocess.run(cmd, env=env, capture_output=True, text=True)
@@ -172,6 +172,20 @@ def test_a_forced_rerun_that_writes_the_same_bytes_does_not_cascade(smoke):
         w, h = inp.spec().width, inp.spec().height
         inp.close()
         assert limit > w * h * 3 * 4 * 2, (photo["path"], w, h)      # float32 RGB EXR, uncompressed, twice over
+
+
+def test_cache_needs_its_folder_and_says_so_in_one_line(smoke, tmp_path):
+    """--cache precompute without $SNAKEMAKE_OUTPUT_CACHE fails with one line naming the variable (no traceback);
+    with it, the cached rule is planned from the cache folder."""
+    repo, workdir, _ = smoke
+    env = {k: v for k, v in os.environ.items() if k != "SNAKEMAKE_OUTPUT_CACHE"}
+    proc = _snake(repo, workdir, "-n", "--cache", "precompute", check=False, env=env)
+    out = proc.stdout + proc.stderr
+    assert proc.returncode != 0 and "SNAKEMAKE_OUTPUT_CACHE" in out, out[-2000:]
+    assert "Traceback" not in out, out[-3000:]
+    env["SNAKEMAKE_OUTPUT_CACHE"] = str(tmp_path)
+    proc = _snake(repo, workdir, "-n", "--cache", "precompute", env=env)
+    assert proc.returncode == 0
 
 
 def _rule_scripts(repo: Path) -> dict:
