@@ -40,6 +40,12 @@ def src(path):
     return resolve_path(path, ROOT)
 
 
+def only(section, *keys):
+    """The keys of a config section that a rule's script reads (PyPSA-Eur's habit): its params hold nothing else,
+    so a setting the script does not read reruns nothing."""
+    return {k: section[k] for k in keys if k in section}
+
+
 def script_path(name):
     return str(ROOT / "scripts" / name)
 

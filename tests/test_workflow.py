@@ -188,6 +188,39 @@ def test_cache_needs_its_folder_and_says_so_in_one_line(smoke, tmp_path):
     assert proc.returncode == 0
 
 
+def _edited(repo: Path, tmp_path: Path, edit) -> Path:
+    import yaml
+    cfg = yaml.safe_load((repo / "config" / "smoke.yaml").read_text())
+    edit(cfg)
+    f = tmp_path / "edited.yaml"
+    f.write_text(yaml.safe_dump(cfg, sort_keys=False))
+    return f
+
+
+def _set_deep(path, value):
+    def edit(cfg):
+        node = cfg
+        for k in path[:-1]:
+            node = node.setdefault(k, {})
+        node[path[-1]] = value
+    return edit
+
+
+@pytest.mark.parametrize("path, value, expected, absent", [
+    # a per-entry setting reruns its entry's job alone
+    (["leaves", "cases", "warm_autumn", "delta_T"], 5.0, {"leaf_season": 1}, ()),
+    (["mie", "demo", "silver_lining", "distance"], 41000.0, {"mie_render": 1}, ()),
+    # a setting the pigment maps never read reruns the colour, not the reaction-diffusion maps
+    (["patterns", "tiny_spot", "concentration"], 1.5, {"pattern_color": 1}, ("pigment_maps",)),
+], ids=["leaf case", "mie demo render", "pattern concentration"])
+def test_a_setting_reruns_only_the_jobs_that_read_it(smoke, tmp_path, path, value, expected, absent):
+    repo, workdir, _ = smoke
+    counts = _job_counts(_snake(repo, workdir, "-n", configfile=_edited(repo, tmp_path, _set_deep(path, value))).stdout)
+    for rule, n in expected.items():
+        assert counts.get(rule) == n, counts
+    assert not set(absent) & set(counts), counts
+
+
 def _rule_scripts(repo: Path) -> dict:
     out = {}
     for smk in (repo / "workflow" / "rules").glob("*.smk"):

@@ -7,7 +7,7 @@ rule leaf_season:
         strip=f"{RESULTS}/leaves/{config['leaves']['name']}/{{climate}}/strip.png",
         csv=f"{RESULTS}/leaves/{config['leaves']['name']}/{{climate}}/concentrations.csv",
     params:
-        spec=config["leaves"],
+        spec=only(config["leaves"], "climate", "season", "size", "optics"),
         case=lambda wc: config["leaves"]["cases"][wc.climate],
         dates=config["leaves"]["dates"],
         seed=config["seed"],

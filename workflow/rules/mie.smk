@@ -125,7 +125,7 @@ rule mie_render:
     input:
         unpack(_mie_shot_inputs),
     params:
-        demo=lambda wc: config["mie"]["demo"],
+        demo=lambda wc: only(config["mie"]["demo"], "sun", "resolution", wc.shot),
         render=lambda wc: config["mie"]["render"],
         code=script_fingerprint("mie_render.py"),
     log:

@@ -5,7 +5,7 @@ rule pigment_maps:
         maps=[f"{RESULTS}/patterns/{{pattern}}/pigment_{p}.exr" for p in (0, 1)],
         preview=f"{RESULTS}/patterns/{{pattern}}/maps.png",
     params:
-        spec=lambda wc: config["patterns"][wc.pattern],
+        spec=lambda wc: only(config["patterns"][wc.pattern], "size", "shape", "venation", "rd", "normalise"),
         seed=config["seed"],
         root=str(ROOT),
         code=script_fingerprint("pigment_maps.py"),
@@ -27,7 +27,7 @@ rule pattern_color:
         color=f"{RESULTS}/patterns/{{pattern}}/color.exr",
         preview=f"{RESULTS}/patterns/{{pattern}}/preview.png",
     params:
-        spec=lambda wc: config["patterns"][wc.pattern],
+        spec=lambda wc: only(config["patterns"][wc.pattern], "concentration", "pigments", "illuminant"),
         code=script_fingerprint("pattern_color.py"),
     log:
         f"{RESULTS}/logs/pattern_color/{{pattern}}.log",
