@@ -2,7 +2,7 @@
 in front of the analytic sky, the OIDN denoiser fed with the cloud's albedo/normal features, and for
 `phase: mie_blend` the Mie/HG ratio of this sun's point-to-point solutions. Writes the frame (EXR R,G,B; for
 mie_blend also its HG twin hg.R,hg.G,hg.B), the frame before the denoiser with the feature images
-(`.raw.exr`) and a PNG at the shot's fixed exposure."""
+(`.raw.exr`); rule `frame_preview` draws its PNG."""
 from pathlib import Path
 
 import numpy as np
@@ -67,7 +67,6 @@ def main(snakemake, log):
                  attrs={**attrs, "denoised": False}, stage="render_frame")
     io.write_exr(snakemake.output.exr, np.concatenate(chans, axis=-1), names,
                  attrs={**attrs, "denoised": shot["denoise"] != "none"}, stage="render_frame")
-    io.write_png(snakemake.output.png, out["final"], exposure=par.exposure)
     log.info(f"mean RGB {np.round(out['final'].reshape(-1, 3).mean(0), 4).tolist()}; timings "
              f"{ {k: round(v, 2) for k, v in out['timings'].items()} }")
 

@@ -35,6 +35,8 @@ MODEL: dict[str, dict[str, float]] = {  # bytes per unit / MB; n = measured jobs
     "animation": {"base": 182.7, "pixels": 35.93 / MB},  # n=2, max residual 0.0 MB
     "composite": {"base": 323.9, "samples": 0 / MB, "texture_pixels": 173 / MB},  # n=4, max residual 115.3 MB
     "composite_reference": {"base": 373.6, "spectral_samples": 8.105 / MB, "texture_pixels": 0 / MB},  # n=3, max residual 0.5 MB
+    # measured by hand (one frame read + its PNG: 221 MB at 640x480, 595 MB at 1920x1080 peak RSS)
+    "frame_preview": {"base": 156.0, "pixels": 212 / MB},  # n=2
     "fit": {"base": 298.3, "pixels": 2275 / MB, "table_values": 0 / MB},  # n=2, max residual 0.0 MB
     # all-orders tables (8 + 4x3 band images per node): one main-job run (kite, 320x240, 7 extinctions x 5 g,
     # 55.9 M table values): 1008 MB peak -> 9.7 bytes per value over base and pixels (the tables as read, their
@@ -276,6 +278,10 @@ def job_features(rule: str, config: dict, wildcards: dict, root) -> tuple[str, d
         lv = config.get("leaves") or {}
         feats["pixels"] = int(lv.get("size", 256)) ** 2 * len(lv.get("dates") or [1])
         keys["pixels"] = "leaves.size"
+    elif rule == "frame_preview":
+        shot = config["shots"][wc["shot"]]
+        feats["pixels"] = _pixels(shot.get("resolution", [640, 480]))
+        keys["pixels"] = f"shots.{wc['shot']}.resolution"
     elif rule == "animation":
         shot = config["shots"][wc["shot"]]
         feats["pixels"] = _pixels(shot.get("resolution", [640, 480])) * int(shot.get("frames", 24))

@@ -122,7 +122,6 @@ rule render_frame:
     output:
         exr=f"{RESULTS}/shots/{{shot}}/frames/{{frame}}.exr",
         raw=f"{RESULTS}/shots/{{shot}}/frames/{{frame}}.raw.exr",
-        png=f"{RESULTS}/shots/{{shot}}/frames/{{frame}}.png",
     input:
         unpack(_shot_frame_inputs),
     wildcard_constraints:
@@ -130,7 +129,6 @@ rule render_frame:
         frame=r"\d{4}",
     params:
         shot=_shot_frame_settings,
-        exposure=lambda wc: config["shots"][wc.shot]["exposure"],
         mie_sun=_shot_mie_sun,
         # only the final-pass settings the Mie/HG ratio uses (not the demo's light colour or sky)
         mie_render=lambda wc: {k: config["mie"]["render"][k] for k in _MIE_MARCH_KEYS} if _shot_mie_sun(wc) else {},
@@ -146,6 +144,30 @@ rule render_frame:
         runtime=lambda wc: 30 if config["shots"][wc.shot]["resolution"][0] * config["shots"][wc.shot]["resolution"][1] <= 640 * 480 else 120,
     script:
         script_path("render_frame.py")
+
+
+# The frame's PNG (a preview at the shot's fixed exposure): its own rule, so a new exposure redraws the PNGs and
+# the animation and renders no frame.
+rule frame_preview:
+    output:
+        png=f"{RESULTS}/shots/{{shot}}/frames/{{frame}}.png",
+    input:
+        exr=f"{RESULTS}/shots/{{shot}}/frames/{{frame}}.exr",
+    wildcard_constraints:
+        shot=r"[^/]+",
+        frame=r"\d{4}",
+    params:
+        exposure=lambda wc: config["shots"][wc.shot]["exposure"],
+        code=script_fingerprint("frame_preview.py"),
+    log:
+        f"{RESULTS}/logs/shots/{{shot}}/frame_preview.{{frame}}.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/rules/frame_preview/shots/{{shot}}/frame_preview.{{frame}}.tsv",
+    threads: 1
+    resources:
+        mem_mb=estimated_mem_mb("frame_preview"),
+    script:
+        script_path("frame_preview.py")
 
 
 rule animation:
