@@ -212,9 +212,11 @@ def _set_deep(path, value):
     (["mie", "demo", "silver_lining", "distance"], 41000.0, {"mie_render": 1}, ()),
     # a setting the pigment maps never read reruns the colour, not the reaction-diffusion maps
     (["patterns", "tiny_spot", "concentration"], 1.5, {"pattern_color": 1}, ("pigment_maps",)),
+    # adding a composite frame renders that frame alone
+    (["composite", "garden", "frames"], [0, 1, 2], {"composite": 1}, ()),
     # a preview-only setting redraws the previews, renders no frame
     (["shots", "tiny", "exposure"], 1.234, {"frame_preview": 3, "animation": 1}, ("render_frame", "interpolate")),
-], ids=["leaf case", "mie demo render", "pattern concentration", "shot exposure"])
+], ids=["leaf case", "mie demo render", "pattern concentration", "composite frame", "shot exposure"])
 def test_a_setting_reruns_only_the_jobs_that_read_it(smoke, tmp_path, path, value, expected, absent):
     repo, workdir, _ = smoke
     counts = _job_counts(_snake(repo, workdir, "-n", configfile=_edited(repo, tmp_path, _set_deep(path, value))).stdout)

@@ -15,6 +15,13 @@ def _composite_shot(wc):
     return config["shots"][shot] if shot else None
 
 
+def _composite_entry(wc):
+    """The composite entry without the keys that only choose which jobs run (`frames`, `reference`): adding a
+    frame or the reference render reruns no existing frame."""
+    entry = config["composite"][wc.name]
+    return only(entry, *(k for k in entry if k not in ("frames", "reference")))
+
+
 def _composite_inputs(wc):
     return _composite_input_files(config["composite"][wc.name], int(wc.frame), RESULTS, str(ROOT), _composite_shot(wc))
 
@@ -30,7 +37,7 @@ rule composite:
     wildcard_constraints:
         frame=r"\d{4}",
     params:
-        entry=lambda wc: config["composite"][wc.name],
+        entry=_composite_entry,
         shot=_composite_shot,
         results=RESULTS,
         root=str(ROOT),
@@ -58,7 +65,7 @@ rule composite_reference:
     wildcard_constraints:
         frame=r"\d{4}",
     params:
-        entry=lambda wc: config["composite"][wc.name],
+        entry=_composite_entry,
         shot=_composite_shot,
         results=RESULTS,
         root=str(ROOT),
