@@ -214,9 +214,11 @@ def _set_deep(path, value):
     (["patterns", "tiny_spot", "concentration"], 1.5, {"pattern_color": 1}, ("pigment_maps",)),
     # adding a composite frame renders that frame alone
     (["composite", "garden", "frames"], [0, 1, 2], {"composite": 1}, ()),
+    # one more tile size builds that texture from the existing tile set
+    (["tiles", "grass", "sizes"], [[256, 192], [96, 96]], {"tile_texture": 1}, ("tileset",)),
     # a preview-only setting redraws the previews, renders no frame
     (["shots", "tiny", "exposure"], 1.234, {"frame_preview": 3, "animation": 1}, ("render_frame", "interpolate")),
-], ids=["leaf case", "mie demo render", "pattern concentration", "composite frame", "shot exposure"])
+], ids=["leaf case", "mie demo render", "pattern concentration", "composite frame", "tile size", "shot exposure"])
 def test_a_setting_reruns_only_the_jobs_that_read_it(smoke, tmp_path, path, value, expected, absent):
     repo, workdir, _ = smoke
     counts = _job_counts(_snake(repo, workdir, "-n", configfile=_edited(repo, tmp_path, _set_deep(path, value))).stdout)

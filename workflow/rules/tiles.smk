@@ -9,7 +9,7 @@ rule tileset:
         example=lambda wc: src(config["tiles"][wc.texture]["path"]),
         embed=lambda wc: [src(e["path"]) for e in config["tiles"][wc.texture]["embed"]],
     params:
-        spec=lambda wc: config["tiles"][wc.texture],
+        spec=lambda wc: only(config["tiles"][wc.texture], "tile_size", "set", "ga", "seams", "seed", "margin", "embed"),
         code=script_fingerprint("tileset.py"),
     log:
         f"{RESULTS}/logs/tileset/{{texture}}.log",
