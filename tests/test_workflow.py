@@ -281,6 +281,12 @@ def test_editing_a_library_module_reruns_exactly_its_importers(smoke, smoke_dag,
     assert expected <= set(everything) <= downstream | {"all"}
 
 
+def _snapshot(results: Path) -> dict:
+    """Every product's bytes by its path under ``results`` (logs and benchmark timings left out)."""
+    return {p.relative_to(results).as_posix(): p.read_bytes() for p in results.rglob("*")
+            if p.is_file() and p.relative_to(results).parts[0] not in ("logs", "benchmarks")}
+
+
 def test_forced_rerun_is_byte_identical_and_clears_stale_temp_files(smoke):
     """Deterministic stages: a forced rerun of the whole smoke workflow writes the same bytes (no wall-clock time
     in any cached output, no DateTime in EXR headers); temp files of a killed earlier run are removed."""
@@ -288,8 +294,7 @@ def test_forced_rerun_is_byte_identical_and_clears_stale_temp_files(smoke):
     results = workdir / "results"
 
     def snapshot():
-        return {p.relative_to(results).as_posix(): p.read_bytes() for p in results.rglob("*")
-                if p.is_file() and p.relative_to(results).parts[0] not in ("logs", "benchmarks")}
+        return _snapshot(results)
 
     before = snapshot()
     stale = [results / "volumes/tiny/.density.k1ll3d_x.vol", results / "sky/kite/.sun.abcd1234.yaml",
@@ -315,8 +320,7 @@ def test_a_killed_run_is_recovered_by_one_command(smoke):
     results = workdir / "results"
 
     def snapshot():
-        return {p.relative_to(results).as_posix(): p.read_bytes() for p in results.rglob("*")
-                if p.is_file() and p.relative_to(results).parts[0] not in ("logs", "benchmarks")}
+        return _snapshot(results)
 
     before = snapshot()
     env = dict(os.environ, PYTHONPATH=str(repo / "src"), PYTHONUNBUFFERED="1")
