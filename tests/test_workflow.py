@@ -352,8 +352,12 @@ def test_a_live_run_keeps_its_lock(tmp_path):
     locks = tmp_path / ".snakemake" / "locks"
     locks.mkdir(parents=True)
     (locks / "0.input.lock").write_text("x")
+    import time
     holder = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)", "snakemake"], cwd=tmp_path)
     try:
+        t0 = time.time()
+        while not snakemake_processes(tmp_path) and time.time() - t0 < 10:   # until the child has exec'd
+            time.sleep(0.05)
         assert snakemake_processes(tmp_path) == [holder.pid]
         assert clear_stale_locks(tmp_path) == ([], [holder.pid])
         assert (locks / "0.input.lock").exists()
