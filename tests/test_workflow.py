@@ -328,10 +328,9 @@ def test_a_killed_run_is_recovered_by_one_command(smoke):
                        "--directory", str(workdir), "--cores", "2", "--forcerun", "sky"]
     proc = subprocess.Popen(cmd, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
                             start_new_session=True)
-    t0 = time.time()
     incomplete = workdir / ".snakemake" / "incomplete"
     while not (incomplete.is_dir() and any(incomplete.iterdir())):
-        assert proc.poll() is None and time.time() - t0 < 120, "the forced rerun did not start a job"
+        assert proc.poll() is None, "the forced rerun ended before it started a job"
         time.sleep(0.2)
     os.killpg(proc.pid, signal.SIGKILL)
     proc.wait()
