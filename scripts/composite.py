@@ -5,7 +5,7 @@ import numpy as np
 
 from natscene.composite.inputs import build_set, sun_c_in_from_product
 from natscene.composite.renderer import SetRenderer, spectral_coverage
-from natscene.io import write_exr, write_png
+from natscene.io import write_exr
 from natscene.runner import run
 
 
@@ -35,7 +35,6 @@ def main(snakemake, log):
     write_exr(snakemake.output.hybrid, hybrid.to_array(), hybrid.channel_names(), attrs, stage="composite")
     write_exr(snakemake.output.final, np.concatenate([final, hybrid.alpha[..., None]], -1), ["R", "G", "B", "A"],
               attrs, stage="composite")
-    write_png(snakemake.output.png, final, exposure=shot["exposure"] if shot else "auto")
 
 
 run(snakemake, main)

@@ -1,6 +1,6 @@
 """Rule `composite_reference`: the full-spectral reference of a composite frame (Dong 2007 §2.5), compared
-with the hybrid render of the same rays: reference.exr (R, G, B, dE2000), compare.png (hybrid | full-spectral |
-CIEDE2000 map), compare.yaml (agreement; the times go to the log and benchmarks/composite.py)."""
+with the hybrid render of the same rays: reference.exr (R, G, B, dE2000) and compare.yaml (agreement; the times go
+to the log and benchmarks/composite.py). Rule `composite_compare` draws them as compare.png."""
 import time
 
 import colour
@@ -10,7 +10,7 @@ from natscene.color import linear_srgb_to_lab
 from natscene.composite.full_spectral import render_full_spectral
 from natscene.composite.inputs import build_set, sun_c_in_from_product
 from natscene.composite.renderer import SetRenderer, spectral_coverage
-from natscene.io import auto_exposure, write_exr, write_png, write_yaml
+from natscene.io import write_exr, write_yaml
 from natscene.runner import run
 
 
@@ -43,10 +43,6 @@ def main(snakemake, log):
               {"composite": snakemake.wildcards.name, "frame": frame, **{k: v for k, v in stats.items()
                                                                         if not isinstance(v, dict)}},
               stage="composite_reference")
-    e = shot["exposure"] if shot else auto_exposure(np.concatenate([final, ref], 1))
-    heat = np.stack([np.clip(de / 2, 0, 1), np.clip(1 - np.abs(de - 1), 0, 1) * 0.6, np.clip(1 - de, 0, 1) * 0.3],
-                    -1) / e  # dE 0 dark blue-green, 1 yellow-green, >= 2 red (linear, shown at the same exposure)
-    write_png(snakemake.output.png, np.concatenate([final, ref, heat.astype(np.float32)], 1), exposure=e)
     write_yaml(snakemake.output.yaml, stats)
 
 

@@ -5,7 +5,7 @@ import numpy as np
 
 from natscene import io
 from natscene.fit.keyframe import fit_keyframe
-from natscene.fit.report import contact_sheet, convergence_csv, convergence_plot
+from natscene.fit.report import convergence_csv, convergence_plot
 from natscene.fit.settings import fit_settings
 from natscene.runner import run
 from natscene.scatter.tables import load_tables
@@ -36,9 +36,6 @@ def main(snakemake, log):
                  attrs={"keyframe": par.name, "objective": [c.objective for c in res.ranked],
                         "params": [[c.values[p] for p in names] for c in res.ranked],
                         "param_names": list(names)}, stage="fit")
-    labels = [f"#{i + 1} O={c.objective:.3f}" for i, c in enumerate(res.ranked)]
-    io.write_png(out.sheet, contact_sheet(photo, list(images), labels, columns=settings.contact_columns),
-                 encoded=True)
     io.write_text(out.csv, convergence_csv(res.best_history, res.mean_history))
     convergence_plot(out.plot, res.best_history, res.mean_history,
                      title=f"{par.name}: {params['method']} ({res.reason})", epsilon_o=settings.epsilon_o)

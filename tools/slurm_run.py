@@ -225,6 +225,17 @@ def explain_failure(output: str, workdir: Path) -> str:
     return "\n".join(lines)
 
 
+def _workdir(extra: list[str]) -> Path:
+    """The workflow's working directory from Snakemake's arguments (--directory / -d), else the current one."""
+    workdir = Path.cwd()
+    for i, a in enumerate(extra):
+        if a in ("-d", "--directory") and i + 1 < len(extra):
+            workdir = Path(extra[i + 1])
+        elif a.startswith("--directory="):
+            workdir = Path(a.split("=", 1)[1])
+    return workdir
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0], allow_abbrev=False,
                                  formatter_class=argparse.RawDescriptionHelpFormatter,
@@ -259,6 +270,10 @@ def main(argv: list[str] | None = None) -> int:
     env = dict(os.environ, NATSCENE_MEMORY_MB=os.environ.get("NATSCENE_MEMORY_MB", str(mem_mb)),
                # a job's --mem also covers Snakemake's batch step and the Snakemake of its job step
                NATSCENE_JOB_OVERHEAD_MB=os.environ.get("NATSCENE_JOB_OVERHEAD_MB", str(SLURM_JOB_OVERHEAD_MB)))
+    # a killed earlier run's lock is cleared when no Snakemake process holds it; the profile's rerun-incomplete
+    # then redoes the jobs it interrupted (natscene.recover, as `make run` does)
+    from natscene.recover import main as recover
+    recover(["--directory", str(_workdir(extra))])
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, bufsize=1, env=env)
     captured = []
     assert proc.stdout is not None
@@ -268,12 +283,7 @@ def main(argv: list[str] | None = None) -> int:
         captured.append(line)
     rc = proc.wait()
     if rc != 0 and "-n" not in extra and "--dry-run" not in extra:
-        workdir = Path.cwd()
-        for i, a in enumerate(extra):
-            if a in ("-d", "--directory") and i + 1 < len(extra):
-                workdir = Path(extra[i + 1])
-            elif a.startswith("--directory="):
-                workdir = Path(a.split("=", 1)[1])
+        workdir = _workdir(extra)
         print("\nslurm_run: the run did not complete.\n" + explain_failure("".join(captured), workdir),
               file=sys.stderr)
     return rc

@@ -34,9 +34,17 @@ SLACK_MB = 200.0
 MODEL: dict[str, dict[str, float]] = {  # bytes per unit / MB; n = measured jobs, residual = largest misfit
     "animation": {"base": 182.7, "pixels": 35.93 / MB},  # n=2, max residual 0.0 MB
     "composite": {"base": 323.9, "samples": 0 / MB, "texture_pixels": 173 / MB},  # n=4, max residual 115.3 MB
+    # the same script and images as frame_preview (one EXR read, its PNG)
+    "composite_preview": {"base": 156.0, "pixels": 212 / MB},
+    # measured by hand (two EXRs read, a strip three frames wide: 640x480 and 1920x1080)
+    "composite_compare": {"base": 160.0, "pixels": 578 / MB},  # n=2 (338 and 1358 MB)
     "composite_reference": {"base": 373.6, "spectral_samples": 8.105 / MB, "texture_pixels": 0 / MB},  # n=3, max residual 0.5 MB
     # measured by hand (one frame read + its PNG: 221 MB at 640x480, 595 MB at 1920x1080 peak RSS)
     "frame_preview": {"base": 156.0, "pixels": 212 / MB},  # n=2
+    # measured by hand (peak RSS of the script's reads and drawing: 320x240 and 640x480 views, 11 renders)
+    "fit_sheet": {"base": 197.0, "pixels": 43 / MB},  # n=2
+    # measured by hand (6 frames: 187 MB at 640x480, 221 MB at 1920x1080)
+    "filmstrip": {"base": 181.0, "pixels": 3.3 / MB},  # n=2
     "fit": {"base": 298.3, "pixels": 2275 / MB, "table_values": 0 / MB},  # n=2, max residual 0.0 MB
     # all-orders tables (8 + 4x3 band images per node): one main-job run (kite, 320x240, 7 extinctions x 5 g,
     # 55.9 M table values): 1008 MB peak -> 9.7 bytes per value over base and pixels (the tables as read, their
@@ -258,6 +266,11 @@ def job_features(rule: str, config: dict, wildcards: dict, root) -> tuple[str, d
             feats["spectral_samples"], keys["spectral_samples"] = p * spp * n_wl, key
         feats["texture_pixels"] = _composite_texture_pixels(config, c, root)
         keys["texture_pixels"] = f"composite.{wc['name']}.ground.texture"
+    elif rule in ("composite_preview", "composite_compare"):
+        c = config["composite"][wc["name"]]
+        res = config["shots"][c["shot"]].get("resolution", [640, 480]) if c.get("shot") else c.get("resolution", [320, 240])
+        feats["pixels"] = _pixels(res)
+        keys["pixels"] = f"shots.{c['shot']}.resolution" if c.get("shot") else f"composite.{wc['name']}.resolution"
     elif rule == "tileset":
         t = config["tiles"][wc["texture"]]
         size = image_size(resolve_path(t["path"], root))
@@ -286,6 +299,16 @@ def job_features(rule: str, config: dict, wildcards: dict, root) -> tuple[str, d
         shot = config["shots"][wc["shot"]]
         feats["pixels"] = _pixels(shot.get("resolution", [640, 480])) * int(shot.get("frames", 24))
         keys["pixels"] = f"shots.{wc['shot']}.resolution"
+    elif rule == "filmstrip":
+        shot = config["shots"][wc["shot"]]
+        count = min(int(shot.get("frames", 24)), int((shot.get("filmstrip") or {}).get("count", 6)))
+        feats["pixels"] = _pixels(shot.get("resolution", [640, 480])) * count
+        keys["pixels"] = f"shots.{wc['shot']}.resolution"
+    elif rule == "fit_sheet":  # the photo and the top_k ranked renders at the view's resolution
+        kf = config["keyframes"][wc["keyframe"]]
+        p = _pixels(config["views"][kf["view"]].get("resolution", [320, 240]))
+        feats["pixels"] = p * (1 + int((config.get("fit") or {}).get("top_k", 10)))
+        keys["pixels"] = f"views.{kf['view']}.resolution"
     return model, feats, keys
 
 

@@ -9,10 +9,11 @@ from natscene.composite.inputs import input_files as _composite_input_files
 
 
 def _composite_shot(wc):
+    """The keys of the composite's shot that the set reads (its volume, resolution and sky), or None."""
     shot = config["composite"][wc.name].get("shot")
     if shot and shot not in config.get("shots", {}):
         raise ValueError(f"config composite.{wc.name}.shot: {shot!r} is not in 'shots'")
-    return config["shots"][shot] if shot else None
+    return only(config["shots"][shot], "volume", "resolution", "sky") if shot else None
 
 
 def _composite_entry(wc):
@@ -20,6 +21,12 @@ def _composite_entry(wc):
     frame or the reference render reruns no existing frame."""
     entry = config["composite"][wc.name]
     return only(entry, *(k for k in entry if k not in ("frames", "reference")))
+
+
+def _composite_exposure(wc):
+    """The exposure of the composite's PNGs: its shot's, else "auto"."""
+    shot = config["composite"][wc.name].get("shot")
+    return config["shots"][shot]["exposure"] if shot else "auto"
 
 
 def _composite_inputs(wc):
@@ -30,8 +37,6 @@ rule composite:
     output:
         hybrid=f"{RESULTS}/composite/{{name}}/{{frame}}/hybrid.exr",
         final=f"{RESULTS}/composite/{{name}}/{{frame}}/final.exr",
-        png=report(f"{RESULTS}/composite/{{name}}/{{frame}}/final.png", category="Composite",
-                   subcategory="{name}", labels={"composite": "{name}", "frame": "{frame}", "image": "final"}),
     input:
         _composite_inputs,
     wildcard_constraints:
@@ -53,12 +58,32 @@ rule composite:
         script_path("composite.py")
 
 
+# The final image's PNG at the shot's exposure (auto without a shot): its own rule, so a new exposure redraws it.
+rule composite_preview:
+    output:
+        png=report(f"{RESULTS}/composite/{{name}}/{{frame}}/final.png", category="Composite",
+                   subcategory="{name}", labels={"composite": "{name}", "frame": "{frame}", "image": "final"}),
+    input:
+        exr=f"{RESULTS}/composite/{{name}}/{{frame}}/final.exr",
+    wildcard_constraints:
+        frame=r"\d{4}",
+    params:
+        exposure=_composite_exposure,
+        code=script_fingerprint("exr_preview.py"),
+    log:
+        f"{RESULTS}/logs/composite_preview/{{name}}.{{frame}}.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/rules/composite_preview/composite/{{name}}.{{frame}}.tsv",
+    threads: 1
+    resources:
+        mem_mb=estimated_mem_mb("composite_preview"),
+    script:
+        script_path("exr_preview.py")
+
+
 rule composite_reference:
     output:
         exr=f"{RESULTS}/composite/{{name}}/{{frame}}/reference.exr",
-        png=report(f"{RESULTS}/composite/{{name}}/{{frame}}/compare.png", category="Composite",
-                   subcategory="{name}",
-                   labels={"composite": "{name}", "frame": "{frame}", "image": "hybrid | full-spectral | dE2000"}),
         yaml=f"{RESULTS}/composite/{{name}}/{{frame}}/compare.yaml",
     input:
         _composite_inputs,
@@ -79,6 +104,32 @@ rule composite_reference:
         mem_mb=estimated_mem_mb("composite_reference"),
     script:
         script_path("composite_reference.py")
+
+
+# compare.png (hybrid | full-spectral | dE2000) at the composite's exposure: its own rule, so a new exposure
+# redraws it and renders nothing.
+rule composite_compare:
+    output:
+        png=report(f"{RESULTS}/composite/{{name}}/{{frame}}/compare.png", category="Composite",
+                   subcategory="{name}",
+                   labels={"composite": "{name}", "frame": "{frame}", "image": "hybrid | full-spectral | dE2000"}),
+    input:
+        final=f"{RESULTS}/composite/{{name}}/{{frame}}/final.exr",
+        reference=f"{RESULTS}/composite/{{name}}/{{frame}}/reference.exr",
+    wildcard_constraints:
+        frame=r"\d{4}",
+    params:
+        exposure=_composite_exposure,
+        code=script_fingerprint("composite_compare.py"),
+    log:
+        f"{RESULTS}/logs/composite_compare/{{name}}.{{frame}}.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/rules/composite_compare/composite/{{name}}.{{frame}}.tsv",
+    threads: 1
+    resources:
+        mem_mb=estimated_mem_mb("composite_compare"),
+    script:
+        script_path("composite_compare.py")
 
 
 for _name, _entry in config["composite"].items():

@@ -158,7 +158,7 @@ rule frame_preview:
         frame=r"\d{4}",
     params:
         exposure=lambda wc: config["shots"][wc.shot]["exposure"],
-        code=script_fingerprint("frame_preview.py"),
+        code=script_fingerprint("exr_preview.py"),
     log:
         f"{RESULTS}/logs/shots/{{shot}}/frame_preview.{{frame}}.log",
     benchmark:
@@ -167,20 +167,18 @@ rule frame_preview:
     resources:
         mem_mb=estimated_mem_mb("frame_preview"),
     script:
-        script_path("frame_preview.py")
+        script_path("exr_preview.py")
 
 
 rule animation:
     output:
         animation=f"{RESULTS}/shots/{{shot}}/animation{SHOT_ANIMATION_SUFFIX}",
-        filmstrip=f"{RESULTS}/shots/{{shot}}/filmstrip.png",
     input:
         lambda wc: [f"{RESULTS}/shots/{wc.shot}/frames/{f:04d}.png" for f in range(config["shots"][wc.shot]["frames"])],
     wildcard_constraints:
         shot=r"[^/]+",
     params:
         fps=lambda wc: config["shots"][wc.shot]["fps"],
-        filmstrip=lambda wc: config["shots"][wc.shot]["filmstrip"],
         code=script_fingerprint("animation.py"),
     log:
         f"{RESULTS}/logs/shots/{{shot}}/animation.log",
@@ -191,6 +189,36 @@ rule animation:
         mem_mb=estimated_mem_mb("animation"),
     script:
         script_path("animation.py")
+
+
+def _filmstrip_frames(wc):
+    """The frame PNGs the strip shows: `filmstrip.count` of them spread evenly, first and last included."""
+    from natscene.keyframes.animation import strip_indices
+    shot = config["shots"][wc.shot]
+    return [f"{RESULTS}/shots/{wc.shot}/frames/{f:04d}.png"
+            for f in strip_indices(shot["frames"], shot["filmstrip"]["count"])]
+
+
+# The filmstrip: its own rule, so its layout (`filmstrip.count`, `filmstrip.height`) redraws the strip alone.
+rule filmstrip:
+    output:
+        filmstrip=f"{RESULTS}/shots/{{shot}}/filmstrip.png",
+    input:
+        _filmstrip_frames,
+    wildcard_constraints:
+        shot=r"[^/]+",
+    params:
+        height=lambda wc: config["shots"][wc.shot]["filmstrip"]["height"],
+        code=script_fingerprint("filmstrip.py"),
+    log:
+        f"{RESULTS}/logs/shots/{{shot}}/filmstrip.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/rules/filmstrip/shots/{{shot}}/filmstrip.tsv",
+    threads: 1
+    resources:
+        mem_mb=estimated_mem_mb("filmstrip"),
+    script:
+        script_path("filmstrip.py")
 
 
 for _shot_name in config.get("shots", {}):
