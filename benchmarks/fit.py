@@ -28,14 +28,13 @@ from natscene.io import read_exr, read_yaml, write_text  # noqa: E402
 
 
 def synthetic(w=320, h=240):
-    sys.path.insert(0, str(ROOT / "tests"))
-    from test_fit import sphere_tables, sky_image  # noqa: E402
+    from natscene.fit.synthetic import gradient_sky, sphere_tables
     from natscene.scatter.tables import Tables
 
     t = sphere_tables(w, h)
     tab = Tables(t.extinction, t.g, t.orders, t.s_sun, t.s_amb, t.transmittance, t.multiple, t.t_c, t.cos_theta,
                  t.footprint)
-    sky = sky_image(w, h)
+    sky = gradient_sky(w, h)
     photo = sky.copy()
     photo[tab.footprint > 0.5] = 0.8
     return tab, sky, photo, tab.footprint > 0.5, np.array([1.0, 0.95, 0.85]), "synthetic sphere 320x240"

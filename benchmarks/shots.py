@@ -55,7 +55,8 @@ def _kite_params() -> dict:
     return {k: ch[k] for k in PARAMS}
 
 
-def _state(params, az, el, camera):
+def shot_state(params, az, el, camera):
+    """A frame state (params, sun, camera) as natscene.keyframes.shot.frame_state writes it."""
     return {"params": params, "sun": {"direction": sun_direction(az, el).tolist(), "azimuth": az, "elevation": el},
             "camera": camera}
 
@@ -127,7 +128,7 @@ def main():
     shot = {**day, "phase": "hg", "denoise": "oidn"}
     cam = dict(day["keyframes"][0]["camera"])                # the day shot's first camera (metres)
     cam.setdefault("up", [0, 1, 0])
-    state = _state(_kite_params(), 120.0, 30.0, cam)
+    state = shot_state(_kite_params(), 120.0, 30.0, cam)
     render_shot_frame(vol, state, {**shot, "resolution": [32, 24], "render": {**shot["render"], "spp": 1}},
                       denoiser=oidn)                                         # compile the kernels once
     load0 = os.getloadavg()[0]

@@ -172,13 +172,14 @@ def repeated_noise_target(vol, camera, sun, settings, sky=None, nodes=((0.5, 0.8
 def volpath_agreement(transport):
     """Composed tables vs Mitsuba volpath (every order, the tests' 8192-spp renders in
     tests/data/transport_volpath.npz) on the tests' procedural cloud, 48x36, with the tests' settings
-    (all_orders: tests/test_transport.SETTINGS; dobashi: 4 orders, 4096 spp, and the orders above 4 missing)."""
-    sys.path.insert(0, str(ROOT / "tests"))
-    from test_transport import BETAS, CAM, GS, NOSKY, SETTINGS, SIGMAS, SUN, blob_volume, blocks, references
+    (all_orders: natscene.scatter.reference_scene.SETTINGS; dobashi: 4 orders, 4096 spp, and the orders above 4
+    missing)."""
+    from natscene.scatter.reference_scene import (CAM, GS, NOSKY, SETTINGS, SIGMAS, SUN, blob_volume, block_ratios,
+                                                  volpath_references)
     from natscene.scatter.compose import compose
     from natscene.scatter.tables import precompute
     vol = blob_volume()
-    refs = references.__wrapped__()
+    refs = volpath_references(ROOT / "tests" / "data" / "transport_volpath.npz")
     tb = precompute(vol, CAM, SUN, sigmas=[0.0, *SIGMAS], gs=list(GS), seed=1, transport=transport, n_m=4,
                     spp=4096, all_orders=SETTINGS)
     foot = tb.footprint > 0
@@ -187,7 +188,7 @@ def volpath_agreement(transport):
         p = dict(c_in=[1.0] * 3, L_in=1.0, g=g, sigma_t=s, beta=b, L_amb=0.0, kappa_a=[0.0] * 3, **NOSKY)
         ours = compose(tb, p, np.zeros((CAM.height, CAM.width, 3), np.float32))[0][..., 0]
         m = foot & (ref > 0)
-        blk = blocks(ours, ref, m)
+        blk = block_ratios(ours, ref, m)
         out[f"s{s}_g{g}_b{b}"] = {"volpath_mean_ratio": round(float(ours[m].mean() / ref[m].mean()), 4),
                                   "volpath_block_err_max": round(float(np.abs(blk - 1).max()), 4)}
     return out

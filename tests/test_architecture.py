@@ -11,6 +11,11 @@ Layers (CONTRIBUTING.md, "Layout"):
   spectral, composite, denoise), which may import the lower layer and each other (never in a cycle);
 - the workflow layer: ``config_checks`` and ``resources`` (the checks and memory model of a whole config), which
   may import anything; nothing in the package imports them.
+
+The folders around the package (``benchmarks/``, ``tools/``, ``experiments/``: flat scripts that put each other on
+``sys.path``) import no private name of the package or of a script in another folder, and nothing outside
+``tests/`` imports a module of ``tests/`` (shared scenes live in the package, e.g.
+``natscene.scatter.reference_scene``).
 """
 from __future__ import annotations
 
@@ -23,6 +28,7 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGE_DIR = ROOT / "src" / "natscene"
 SCRIPTS = sorted((ROOT / "scripts").glob("*.py"))
+OUTSIDE = ("benchmarks", "tools", "experiments")  # folders of flat scripts around the package
 
 LOWER = {"natscene", "natscene.errors", "natscene.io", "natscene.config", "natscene.color", "natscene.geometry",
          "natscene.phase", "natscene.preview", "natscene.variant", "natscene.llvm", "natscene.fingerprint",
@@ -185,6 +191,57 @@ def test_plain_imports_only(kind):
                 if name in ("import_module", "__import__", "spec_from_file_location"):
                     bad.append(f"{rel(p)}:{node.lineno}: {name}")
     assert not bad, "\n".join(bad)
+
+
+def outside_problems(root: Path = ROOT) -> list[str]:
+    """Imports of a private name from another folder or the package, and imports of tests/, in the scripts of
+    ``benchmarks/``, ``tools/`` and ``experiments/`` under ``root``."""
+    tests = {p.stem for p in (root / "tests").glob("*.py")}
+    homes = {p.stem: p.parent for folder in ("scripts", *OUTSIDE) for p in (root / folder).rglob("*.py")}
+    bad = []
+    for folder in OUTSIDE:
+        for p in sorted((root / folder).rglob("*.py")):
+            where = f"{p.relative_to(root)}"
+            for node in ast.walk(ast.parse(p.read_text())):
+                if isinstance(node, ast.Import):
+                    pairs = [(a.name, None) for a in node.names]
+                elif isinstance(node, ast.ImportFrom) and not node.level:
+                    pairs = [(node.module or "", a.name) for a in node.names]
+                else:
+                    continue
+                for module, name in pairs:
+                    top = module.split(".")[0]
+                    if top in tests and top not in homes:
+                        bad.append(f"{where}:{node.lineno}: imports tests/{top}.py")
+                    parts = module.split(".") + ([name] if name else [])
+                    private = [x for x in parts if x.startswith("_") and not x.startswith("__")]
+                    foreign = top == "natscene" or (top in homes and homes[top] != p.parent)
+                    if private and foreign:
+                        bad.append(f"{where}:{node.lineno}: private {module}{'.' + name if name else ''}")
+            if "\"tests\")" in p.read_text() and "sys.path.insert" in p.read_text():
+                bad.append(f"{where}: puts tests/ on sys.path")
+    return bad
+
+
+def test_benchmarks_tools_and_experiments_import_no_private_name_and_no_test():
+    assert len([p for f in OUTSIDE for p in (ROOT / f).rglob("*.py")]) > 20  # the walk sees the folders
+    bad = outside_problems()
+    assert not bad, "\n".join(bad)
+
+
+def test_the_outside_check_fails_on_planted_imports(tmp_path):
+    for folder in ("tests", "scripts", *OUTSIDE):
+        (tmp_path / folder).mkdir()
+    (tmp_path / "tests" / "test_thing.py").write_text("X = 1\n")
+    (tmp_path / "benchmarks" / "_common.py").write_text("def f(): pass\n")
+    (tmp_path / "benchmarks" / "ok.py").write_text("from _common import f\n")                  # same folder: fine
+    (tmp_path / "tools" / "a.py").write_text("from natscene.scatter.tables import _node_noise\n")
+    (tmp_path / "tools" / "b.py").write_text("from _common import f\n")                        # another folder
+    (tmp_path / "experiments" / "c.py").write_text("def g():\n    from test_thing import X\n")
+    assert sorted(outside_problems(tmp_path)) == [
+        "experiments/c.py:2: imports tests/test_thing.py",
+        "tools/a.py:1: private natscene.scatter.tables._node_noise",
+        "tools/b.py:1: private _common.f"]
 
 
 def test_the_checks_can_fail(tmp_path, monkeypatch):

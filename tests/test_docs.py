@@ -228,3 +228,23 @@ def test_docs_describe_the_product_not_its_history(doc):
     text = doc.read_text().lower()
     found = [p for p in HISTORY if p in text]
     assert not found, f"{_rel(doc)}: development history ({found}); it belongs in commit messages"
+
+
+def test_no_commit_of_this_repository_is_named():
+    """The docs describe today's pipeline; history (and commit hashes) goes to CHANGELOG.md. Every token of 7 or
+    more hex digits in README.md and docs/ is checked against this repository's objects."""
+    if not (ROOT / ".git").exists():
+        pytest.skip("not a git checkout")
+    bad = []
+    for doc in [ROOT / "README.md", *(ROOT / "docs").rglob("*.md")]:
+        for token in sorted(set(re.findall(r"\b[0-9a-f]{7,40}\b", doc.read_text()))):
+            if subprocess.run(["git", "-C", str(ROOT), "cat-file", "-e", f"{token}^{{commit}}"],
+                              capture_output=True).returncode == 0:
+                bad.append(f"{_rel(doc)}: {token}")
+    assert not bad, "commits named in the docs:\n  " + "\n  ".join(bad)
+
+
+def test_docs_img_holds_only_images_the_docs_show():
+    shown = {(d.parent / t).resolve() for d in DOCS for t in links(d) if not re.match(r"[a-z]+:", t)}
+    unused = [_rel(p) for p in sorted((ROOT / "docs" / "img").iterdir()) if p.resolve() not in shown]
+    assert not unused, f"images no doc shows (delete them or show them): {unused}"

@@ -6,8 +6,6 @@ not depend on the scatter stage. Tests against the real ``natscene.scatter`` run
 """
 from __future__ import annotations
 
-import types
-
 import cv2
 import numpy as np
 import pytest
@@ -17,32 +15,8 @@ from natscene.fit.gradient import gradient_descent
 from natscene.fit.kappa import KappaSearch, kappa_grid
 from natscene.fit.objective import Levels, channel_distance, histograms, objective
 from natscene.fit.problem import FitProblem, restrict_tables
+from natscene.fit.synthetic import gradient_sky, sphere_tables
 from natscene.color import srgb_to_linear
-
-EXT = 8.0  # extinction scale of the synthetic sphere
-
-
-def sphere_tables(w=96, h=72):
-    """Tables of a homogeneous sphere (radius 0.35 of the image height) seen head on."""
-    yy, xx = np.mgrid[0:h, 0:w]
-    r = np.hypot((xx + 0.5 - w / 2) / h, (yy + 0.5 - h / 2) / h) / 0.35
-    chord = np.where(r < 1, 2 * np.sqrt(np.clip(1 - r * r, 0, 1)) * 0.35, 0.0)  # path length in units
-    sun_depth = 0.5 + 0.5 * (xx / w)  # relative path to the sun: lit from the left
-    s = np.round(np.arange(11) * 0.1, 10)
-    g = np.round(np.arange(10) * 0.1, 10)
-    tau = s[:, None, None] * EXT * chord[None]
-    trans = np.exp(-tau)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        s_amb = np.where(tau > 0, (1 - trans) / (s[:, None, None] * EXT), chord[None])
-        k = 1 + sun_depth[None]
-        s_sun = np.where(tau > 0, (1 - np.exp(-tau * k)) / k / EXT, 0.0)
-    orders = [2, 3, 4]
-    mult = np.stack([np.stack([(1 - trans) * (0.35 ** o) * (1 + 0.5 * gg) for gg in g]) for o in orders])
-    return types.SimpleNamespace(
-        extinction=s, g=g, orders=orders, s_sun=s_sun.astype(np.float32), s_amb=s_amb.astype(np.float32),
-        transmittance=trans.astype(np.float32), multiple=mult.astype(np.float32),
-        t_c=(0.9 + 0.2 * yy / h).astype(np.float32), cos_theta=np.full((h, w), 0.3, np.float32),
-        footprint=(chord > 0).astype(np.float32))
 
 
 def _interp(grid, x):
@@ -75,17 +49,12 @@ def ref_apply_atmosphere(lc, t_c, kappa, sky):
     return lc * e + (1 - e) * sky[None]
 
 
-def sky_image(w=96, h=72):
-    yy = np.mgrid[0:h, 0:w][0] / h
-    return np.stack([0.15 + 0.1 * yy, 0.3 + 0.1 * yy, 0.7 + 0.05 * yy], -1).astype(np.float32)
-
-
 C_IN = np.array([1.0, 0.93, 0.82])
 
 
 def make_problem(target_values, target_kappa, metric="difference", size=(96, 72)):
     t = sphere_tables(*size)
-    sky = sky_image(*size)
+    sky = gradient_sky(*size)
     prob0 = FitProblem(t, sky, sky, np.ones(sky.shape[:2], bool), C_IN, compose_cloud=ref_compose_cloud,
                        apply_atmosphere=ref_apply_atmosphere)
     target = prob0.render(np.array([target_values]), np.array([target_kappa]))[0]
@@ -182,7 +151,7 @@ def test_kappa_search_equals_bruteforce_joint_search(metric):
 
 def test_restricted_composition_equals_full_image_at_footprint():
     t = sphere_tables()
-    sky = sky_image()
+    sky = gradient_sky()
     m = t.footprint > 0.5
     params = {"c_in": C_IN, **{k: np.array([v]) for k, v in zip(PARAMS, TRUE)}}
     full = ref_compose_cloud(t, params, sky)[0][m]
@@ -193,7 +162,7 @@ def test_restricted_composition_equals_full_image_at_footprint():
 def test_bad_inputs_are_named():
     from natscene.errors import InputError
     t = sphere_tables()
-    sky = sky_image()
+    sky = gradient_sky()
     with pytest.raises(InputError, match="no cloud pixels"):
         FitProblem(t, sky, sky, np.zeros(sky.shape[:2], bool), C_IN, compose_cloud=ref_compose_cloud,
                    apply_atmosphere=ref_apply_atmosphere)
@@ -318,7 +287,7 @@ def test_real_compose_on_restricted_tables_equals_full_image():
     t = sphere_tables()
     tab = tables_mod.Tables(t.extinction, t.g, t.orders, t.s_sun, t.s_amb, t.transmittance, t.multiple, t.t_c,
                             t.cos_theta, t.footprint)
-    sky = sky_image()
+    sky = gradient_sky()
     prob = FitProblem(tab, sky, sky, tab.footprint > 0.5, C_IN)  # the real compose_cloud / apply_atmosphere
     vals = np.array([TRUE, [2.0, 0.2, 0.3, 0.7, 0.5]])
     full = prob.render(vals, np.zeros((2, 3)))

@@ -14,8 +14,8 @@ from natscene.scatter.allorders import AllOrdersSettings, Lighting, Scene
 from natscene.scatter.importance import window_targets
 from natscene.scatter.inscatter import voxel_camera_depth
 from natscene.scatter.photons import trace
+from natscene.scatter.reference_scene import CAM, SUN, blob_volume
 from natscene.scatter.skylight import uniform_dome
-from test_transport import CAM, SUN, blob_volume
 
 BANDS = ((2, 4), (5, None))
 

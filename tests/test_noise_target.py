@@ -12,7 +12,7 @@ from natscene.errors import InputError
 from natscene.scatter.allorders import AllOrdersSettings, Lighting, Scene, budget_scale, standard_error, view_images
 from natscene.scatter.bands import band_weights
 from natscene.scatter.tables import precompute
-from test_transport import CAM, SUN, blob_volume
+from natscene.scatter.reference_scene import CAM, SUN, blob_volume
 
 SIGMA, G, BETA = 0.5, 0.85, 0.99
 

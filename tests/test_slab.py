@@ -33,7 +33,7 @@ from natscene.scatter.bands import band_weights
 from natscene.scatter.single import march_view
 from natscene.scatter.skylight import uniform_dome
 
-from test_transport import _slab, _slab_camera
+from natscene.scatter.reference_scene import slab_camera, slab_volume
 
 TAUS = (1.0, 10.0, 100.0, 300.0)
 GS = (0.0, 0.85)
@@ -89,9 +89,9 @@ def sun_vector(zenith_deg: float) -> np.ndarray:
 def sun_radiance(tau: float, g: float, zenith: float, mu: float, above: bool, seed: int,
                  settings: AllOrdersSettings = SETTINGS) -> dict:
     """pi L / E of the transport under the sun, per beta, in the middle of the slab seen from cos(zenith) mu."""
-    vol = _slab(tau=tau, n=(48, layers(tau), 48), width=12.0)
+    vol = slab_volume(tau=tau, n=(48, layers(tau), 48), width=12.0)
     sun = sun_vector(zenith)
-    cam = _slab_camera(mu, above, res=8)
+    cam = slab_camera(mu, above, res=8)
     scene = Scene(vol, Lighting(sun, None), settings)
     vi = view_images(scene, cam, 1.0, g, seed=seed)
     single = hg(cam.ray_directions() @ sun, g) * march_view(scene.med, cam, [1.0])["S_sun"][0]
@@ -101,8 +101,8 @@ def sun_radiance(tau: float, g: float, zenith: float, mu: float, above: bool, se
 
 def dome_radiance(tau: float, g: float, mu: float, above: bool, seed: int) -> dict:
     """L / L_sky of the transport's skylight (orders >= 1) under a uniform sky above the slab, per beta."""
-    vol = _slab(tau=tau, n=(48, layers(tau), 48), width=12.0)
-    cam = _slab_camera(mu, above, res=8)
+    vol = slab_volume(tau=tau, n=(48, layers(tau), 48), width=12.0)
+    cam = slab_camera(mu, above, res=8)
     scene = Scene(vol, Lighting(sun_vector(0.0), uniform_dome(1.0)), DOME)
     vi = view_images(scene, cam, 1.0, g, seed=seed)
     return {b: float(np.tensordot(band_weights(DOME.sky_bands, vi.sky_ratios, b)[0], vi.sky[0], 1).mean())

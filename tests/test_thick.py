@@ -23,12 +23,13 @@ from natscene.geometry import Camera
 from natscene.scatter.allorders import AllOrdersSettings, Lighting, Scene, view_images
 from natscene.scatter.bands import band_weights
 from natscene.scatter.compose import compose
+from natscene.scatter.reference_scene import CAM, K, NOSKY, SETTINGS, SUN, blob_volume
 from natscene.scatter.render import render
 from natscene.scatter.single import march_view
 from natscene.scatter.skylight import uniform_dome
 from natscene.scatter.tables import load_tables, precompute, save_tables
 
-from test_transport import CAM, K, NOSKY, SETTINGS, SUN, _ratios, blob_volume
+from test_transport import _ratios
 
 REFS = Path(__file__).parent / "data" / "transport_volpath_thick.npz"
 HEAP = ("blob_t100", "blob_t300")

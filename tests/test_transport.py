@@ -17,50 +17,17 @@ import pytest
 
 import natscene  # noqa: F401
 from natscene.errors import InputError
-from natscene.geometry import Camera
 from natscene.scatter.allorders import AllOrdersSettings, Lighting, Scene, view_images
 from natscene.scatter.bands import SUN_BANDS, band_table, band_weights, check_bands, fit_ratios
 from natscene.scatter.compose import compose
 from natscene.scatter.mitsuba_scene import render_reference
+from natscene.scatter.reference_scene import (BETAS, CAM, GS, K, NOSKY, SETTINGS, SIGMAS, SUN, blob_volume,
+                                              block_ratios, slab_camera, slab_volume, volpath_references)
 from natscene.scatter.render import render
 from natscene.scatter.skylight import Dome, uniform_dome
 from natscene.scatter.tables import load_tables, precompute, save_tables
-from natscene.volume.grid import Volume, placement
 
-SUN = np.array([0.5, 0.6, 0.3]) / np.linalg.norm([0.5, 0.6, 0.3])
-CAM = Camera((0.0, 0.25, -1.8), (0.0, 0.28, 0.0), fov=30, width=48, height=36)
-SIGMAS, GS, BETAS = (0.2, 0.5, 1.0), (0.0, 0.85), (0.9, 0.99, 0.999)
-NOSKY = {"sky_scale": [0.0, 0.0, 0.0], "ground_albedo": 0.0}
 REFERENCES = Path(__file__).parent / "data" / "transport_volpath.npz"
-# the all-orders settings of the volpath comparisons: cache cells of one voxel, 0.33 to 1.7 mean free paths of
-# this cloud at sigma_t 0.2 to 1 (the main job's cells of 2 and 4 voxels are 0.6 and 1.2 mean free paths of its
-# cumulus at the fitted sigma_t 0.12; docs/stages/precompute.md, "Measured")
-SETTINGS = AllOrdersSettings(sun_collisions=12_000_000, sky_collisions=200_000, fine_voxels=1, coarse_voxels=1,
-                             camera_lobe=0.6)
-
-
-K = 80.0   # the blob's extinction_scale: extinction [1/m of the unit box] = sigma_t * K
-
-
-def blob_volume(scale=K, n=(48, 32, 48)):
-    """A smooth procedural cloud (an ellipsoidal heap, density falling to 0 at its edge) in a unit box;
-    at sigma_t = 1 the optical depth through its middle is about 40."""
-    nx, ny, nz = n
-    lo, hi = placement((nx, ny, nz))
-    z, y, x = np.meshgrid(np.linspace(-1, 1, nz), np.linspace(0, 1, ny), np.linspace(-1, 1, nx), indexing="ij")
-    d = np.clip(1 - (x ** 2 + ((y - 0.45) / 0.5) ** 2 + z ** 2) / 0.6, 0, 1).astype(np.float32)
-    return Volume(d, lo, hi, scale)
-
-
-def blocks(ours, ref, mask, size=8):
-    """Ratios of the 8x8 block sums over blocks at least half covered by cloud."""
-    H, W = ref.shape[:2]
-    out = []
-    for i in range(0, H - size + 1, size):
-        for j in range(0, W - size + 1, size):
-            if mask[i:i + size, j:j + size].mean() >= 0.5:
-                out.append(ours[i:i + size, j:j + size].sum() / ref[i:i + size, j:j + size].sum())
-    return np.array(out)
 
 
 @pytest.fixture(scope="module")
@@ -79,8 +46,7 @@ def tables(vol, tmp_path_factory):
 @pytest.fixture(scope="module")
 def references():
     """volpath, every order, 8192 spp, for the 18 (sigma_t, g, beta) of the issue (sun only, no sky)."""
-    with np.load(REFERENCES) as z:
-        return {(s, g, b): z[f"s{s:g}_g{g:g}_b{b:g}"] for s in SIGMAS for g in GS for b in BETAS}
+    return volpath_references(REFERENCES)
 
 
 @pytest.mark.parametrize("s, g, b", [(0.5, 0.0, 0.99), (0.2, 0.85, 0.999)])
@@ -100,7 +66,7 @@ def _params(s, g, b):
 def _ratios(ours, ref, foot, label):
     m = foot & (ref > 0)
     mean = ours[m].mean() / ref[m].mean()
-    blk = blocks(ours, ref, m)
+    blk = block_ratios(ours, ref, m)
     print(f"{label}: mean ratio {mean:.4f}, 8x8 blocks {blk.min():.3f}..{blk.max():.3f} ({blk.size})")
     assert blk.size >= 3
     return mean, blk
@@ -152,25 +118,6 @@ def test_every_block_within_10_percent(composed, rendered):
         (_block_failures(composed), _block_failures(rendered))
 
 
-def _slab(tau=2.0, n=(96, 16, 96), width=40.0):
-    """A homogeneous slab of optical thickness ``tau`` at sigma_t = 1: ``width`` times wider than thick."""
-    nx, ny, nz = n
-    thick = 1.0
-    lo = np.array([-width / 2, 0.0, -width / 2])
-    hi = np.array([width / 2, thick, width / 2])
-    return Volume(np.ones((nz, ny, nx), np.float32), lo, hi, tau / thick)
-
-
-def _slab_camera(mu, above=True, distance=400.0, res=16):
-    """A far camera looking at the slab's centre from direction cos(zenith) = mu (azimuth +x)."""
-    s = np.sqrt(max(1 - mu * mu, 0.0))
-    d = np.array([s, mu if above else -mu, 0.0])
-    centre = np.array([0.0, 0.5, 0.0])
-    pos = centre + distance * d
-    up = (0.0, 0.0, 1.0)
-    return Camera(tuple(pos), tuple(centre), up, fov=0.3, width=res, height=res)
-
-
 @pytest.mark.parametrize("g", [0.0, 0.85])
 def test_slab_reflectance_transmittance_match_long_volpath(g):
     """Radiance reflected (view 30 deg from the zenith) and transmitted (30 deg from the nadir) by a
@@ -178,11 +125,11 @@ def test_slab_reflectance_transmittance_match_long_volpath(g):
     collisions scatters by 1.7 % at g 0.85 (reflected; 20 runs: mean 1.012 of the reference, standard error
     0.005: the voxel caches' discretisation, which falls to 1.002 at 32 or 64 voxels across the slab), so the
     test takes the mean of 4 runs of 16 M collisions (about 0.6 %)."""
-    vol = _slab(n=(48, 16, 48), width=12.0)
+    vol = slab_volume(n=(48, 16, 48), width=12.0)
     sun = np.array([0.0, 1.0, 0.0])
     beta = 0.99
     for above in (True, False):
-        cam = _slab_camera(np.cos(np.radians(30)), above)
+        cam = slab_camera(np.cos(np.radians(30)), above)
         ref = sum(render_reference(vol, cam, sun, 1.0, g, beta, orders=100_000, spp=4096, seed=k)
                   for k in range(2))[..., 0].mean() / 2
         p = dict(c_in=[1.0] * 3, L_in=1.0, g=g, extinction=vol.extinction_scale, beta=beta, kappa_a=[0.0] * 3)
@@ -192,18 +139,18 @@ def test_slab_reflectance_transmittance_match_long_volpath(g):
         assert abs(ours / ref - 1) <= 0.02
 
 
-def test_energy_conservation_slab():
+def test_energy_conservationslab_volume():
     """beta = 1, no absorption: reflected + transmitted flux = incident flux (1 %). The fluxes integrate the
     rendered radiance over the hemispheres (Gauss-Legendre in cos(zenith); the field is symmetric about the
     normal under a normal sun); the unscattered beam e^{-tau} is added to the transmitted flux."""
-    vol = _slab(tau=1.0)
+    vol = slab_volume(tau=1.0)
     sun = np.array([0.0, 1.0, 0.0])
     x, wq = np.polynomial.legendre.leggauss(6)
     mus, wts = (x + 1) / 2, wq / 2
     p = dict(c_in=[1.0] * 3, L_in=1.0, g=0.5, extinction=vol.extinction_scale, beta=1.0, kappa_a=[0.0] * 3)
     flux = {}
     for above in (True, False):
-        L = [render(vol, _slab_camera(mu, above, res=8), sun, p, np.zeros(3, np.float32), seed=3,
+        L = [render(vol, slab_camera(mu, above, res=8), sun, p, np.zeros(3, np.float32), seed=3,
                     skylight=False, sun_collisions=3_000_000)[..., 0].mean() for mu in mus]
         flux[above] = 2 * np.pi * float(np.sum(wts * mus * np.asarray(L)))
     total = flux[True] + flux[False] + np.exp(-1.0)
@@ -229,7 +176,7 @@ def test_white_furnace():
               f"min {img[cloud].min() / L:.3f}, max {img[cloud].max() / L:.3f}")
         assert abs(img[cloud].mean() / L - 1) <= 0.02
         # blocks: the photon noise of 6M sky collisions is ~2 % per 8x8 block, so 5 % per block
-        assert np.all(np.abs(blocks(img, np.full_like(img, L), cloud) - 1) <= 0.05)
+        assert np.all(np.abs(block_ratios(img, np.full_like(img, L), cloud) - 1) <= 0.05)
 
 
 def test_band_weights_closed_form():

@@ -79,7 +79,7 @@ def main():
     from natscene.scatter.allorders import Lighting, Scene, settings_from_config, view_images
     from natscene.scatter.transport.all_orders import skylight_dome
     from natscene.volume.build import build_volume
-    from shots import PARAMS, _state
+    from shots import PARAMS, shot_state
 
     view = cfg["views"]["kite"]
     camera = Camera.from_view(view)
@@ -113,7 +113,7 @@ def main():
     cvol, _ = build_volume(cfg["volumes"]["cumulonimbus"], "cumulonimbus")
     cam = dict(day["keyframes"][0]["camera"])
     cam.setdefault("up", [0, 1, 0])
-    state = _state(dict(PARAMS), 120.0, 30.0, cam)
+    state = shot_state(dict(PARAMS), 120.0, 30.0, cam)
     shot = {**day, "phase": "hg", "denoise": "none"}
     render_shot_frame(cvol, state, {**shot, "resolution": [32, 24], "render": {**shot["render"], "spp": 1}})
     for w, h in ((640, 480), (1920, 1080)):

@@ -47,9 +47,9 @@ def mean_view_depth(vol, camera, mask_depth: float = 1e-3) -> float:
 
 
 def prepare(out_dir: Path) -> None:
-    sys.path.insert(0, str(ROOT / "tests"))
+    sys.path.insert(0, str(ROOT / "src"))
     import natscene  # noqa: F401
-    from test_transport import CAM, SUN, blob_volume
+    from natscene.scatter.reference_scene import CAM, SUN, blob_volume
 
     from natscene.config import load_yaml_config
     from natscene.geometry import sun_direction

@@ -30,9 +30,9 @@ def key(sigma: float, g: float, beta: float) -> str:
 
 
 def main() -> int:
-    sys.path.insert(0, str(ROOT / "tests"))
+    sys.path.insert(0, str(ROOT / "src"))
     import mitsuba as mi
-    from test_transport import BETAS, CAM, GS, SIGMAS, SUN, blob_volume
+    from natscene.scatter.reference_scene import BETAS, CAM, GS, SIGMAS, SUN, blob_volume
     from natscene.scatter.mitsuba_scene import render_reference
     vol = blob_volume()
     out = {}

@@ -1,6 +1,6 @@
 """Docs figure: the rendered previews of the main job's volumes (cumulus, cumulonimbus, the Mie stratocumulus deck)
 and a cumulus field at the paper's 402x66x402 box at half size, beside the previous smooth generator's cumulus and
-cumulonimbus rendered the same way. Writes docs/img/volume_previews_new.png.
+cumulonimbus rendered the same way. Writes docs/img/volume_kinds.png.
 
     .venv/bin/python tools/volume_previews.py [config/config.yaml] [out.png]
 """
@@ -46,7 +46,7 @@ def scaled(im: Image.Image, k: float) -> Image.Image:
     return im.resize((int(im.width * k), int(im.height * k)), Image.LANCZOS)
 
 
-def main(config="config/config.yaml", out="docs/img/volume_previews_new.png"):
+def main(config="config/config.yaml", out="docs/img/volume_kinds.png"):
     vols = yaml.safe_load((ROOT / config).read_text())["volumes"]
     field = {"kind": "cumulus_field", "resolution": [201, 33, 201], "seed": 1}
     rows = []

@@ -3,7 +3,7 @@
 Applies ``similarity.patch`` (a photon from order ``similarity_order`` on, optionally only deeper than
 ``similarity_depth`` optical depths from the camera, walks the similar medium: extinction (1 - g) mu_t,
 isotropic scattering, its tallies and order count scaled by 1 / (1 - g); Zhao, Wu, Ramamoorthi & Bala 2014 use
-such relations for the high orders) and traces the sun's light through the blob of tests/test_transport.py at
+such relations for the high orders) and traces the sun's light through the blob of natscene.scatter.reference_scene at
 12 M collisions, against the stored 8192-spp Mitsuba volpath renders (tests/data/transport_volpath.npz):
 
     git apply experiments/similarity/similarity.patch
@@ -19,39 +19,18 @@ from pathlib import Path
 
 import numpy as np
 
-from natscene.geometry import Camera
 from natscene.phase import hg
 from natscene.scatter.allorders import AllOrdersSettings, Lighting, Scene, view_images
 from natscene.scatter.bands import band_weights
+from natscene.scatter.reference_scene import CAM, SUN, blob_volume, block_ratios
 from natscene.scatter.single import march_view
-from natscene.volume.grid import Volume, placement
 
 ROOT = Path(__file__).resolve().parents[2]
-SUN = np.array([0.5, 0.6, 0.3]) / np.linalg.norm([0.5, 0.6, 0.3])
-CAM = Camera((0.0, 0.25, -1.8), (0.0, 0.28, 0.0), fov=30, width=48, height=36)
 CASES = [(1.0, 0.85, 0.999), (0.5, 0.85, 0.999), (1.0, 0.0, 0.999)]     # sigma_t (x 80 /unit), g, beta
 
 
-def blob(scale=80.0, n=(48, 32, 48)):
-    """The procedural heap of tests/test_transport.py (optical depth ~40 through its middle at sigma_t 1)."""
-    nx, ny, nz = n
-    lo, hi = placement((nx, ny, nz))
-    z, y, x = np.meshgrid(np.linspace(-1, 1, nz), np.linspace(0, 1, ny), np.linspace(-1, 1, nx), indexing="ij")
-    d = np.clip(1 - (x ** 2 + ((y - 0.45) / 0.5) ** 2 + z ** 2) / 0.6, 0, 1).astype(np.float32)
-    return Volume(d, lo, hi, scale)
-
-
-def block_ratios(ours, ref, mask, size=8):
-    out = []
-    for i in range(0, ref.shape[0] - size + 1, size):
-        for j in range(0, ref.shape[1] - size + 1, size):
-            if mask[i:i + size, j:j + size].mean() >= 0.5:
-                out.append(ours[i:i + size, j:j + size].sum() / ref[i:i + size, j:j + size].sum())
-    return np.array(out)
-
-
 def main(args):
-    vol = blob()
+    vol = blob_volume()
     refs = np.load(ROOT / "tests" / "data" / "transport_volpath.npz")
     for cfg in args:
         order, depth = (float(v) for v in cfg.split(":"))

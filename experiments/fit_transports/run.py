@@ -1,5 +1,5 @@
-"""The fitting experiments of issue 16, both transport models side by side. Writes
-results/benchmarks/transport_experiments.json and contact sheets under results/benchmarks/.
+"""The fit's experiments with both transport models side by side (docs/stages/fit.md, "Measured"). Writes
+results/experiments/fit_transports.json, the Fig. 5 strip and the contact sheets beside it.
 
 1. Dobashi Fig. 5, harder: the target is a Mitsuba 3 ``volpath`` render of every scattering order of the main
    job's cumulus (kite view, g 0.85, beta 0.9999, known L_in and extinction) over the kite photo's sky, not our own
@@ -12,20 +12,23 @@ results/benchmarks/transport_experiments.json and contact sheets under results/b
 The precompute tables of both models come from results/benchmarks/tables/<transport>/ (written by
 benchmarks/transport.py) or are computed here at the main job's settings.
 
-    .venv/bin/python benchmarks/transport_experiments.py [--seeds 10] [--target-spp 256]
+    .venv/bin/python experiments/fit_transports/run.py [--seeds 10] [--target-spp 256]
 """
 from __future__ import annotations
 
 import argparse
 import json
+import sys
 import time
 from pathlib import Path
 
 import numpy as np
 
-from _common import ROOT, write_result
+ROOT = Path(__file__).resolve().parents[2]
+OUT = ROOT / "results" / "experiments"
+sys.path.insert(0, str(ROOT / "src"))
 
-import natscene  # noqa: F401
+import natscene  # noqa: E402,F401
 
 TRUE = {"L_in": 4.0, "g": 0.85, "extinction": 0.05, "beta": 0.9999}   # extinction in 1/m (water droplets: beta 0.9999)
 
@@ -96,6 +99,7 @@ def main():
     ap.add_argument("--seeds", type=int, default=10)
     ap.add_argument("--target-spp", type=int, default=256)
     args = ap.parse_args()
+    OUT.mkdir(parents=True, exist_ok=True)
     from transport import kite_setup, photo_products
     from natscene.fit.report import contact_sheet
     from natscene.io import write_png
@@ -119,7 +123,7 @@ def main():
         out["fig5_mitsuba"][tr], med = summary(runs, TRUE)
         sheets[tr] = med
         print(tr, out["fig5_mitsuba"][tr])
-    write_png(ROOT / "results" / "benchmarks" / "fig5_mitsuba.png",
+    write_png(OUT / "fig5_mitsuba.png",
               contact_sheet(target, [sheets["all_orders"]["images"][0], sheets["dobashi"]["images"][0]],
                             [f"all orders O={sheets['all_orders']['result'].best.objective:.3f}",
                              f"Dobashi O={sheets['dobashi']['result'].best.objective:.3f}"], columns=3),
@@ -133,7 +137,7 @@ def main():
         print(tr, out["kite_photo"][tr])
         imgs = list(med["images"])
         labels = [f"#{i + 1} O={c.objective:.3f}" for i, c in enumerate(med["result"].ranked)]
-        write_png(ROOT / "results" / "benchmarks" / f"kite_contact_sheet_{tr}.png",
+        write_png(OUT / f"kite_contact_sheet_{tr}.png",
                   contact_sheet(prod["photo"], imgs, labels, columns=4), encoded=True)
 
     # 3. §5.1 repeatability with the all-orders model
@@ -145,7 +149,8 @@ def main():
         "gradient_descent": stats([r["result"].best.objective for r in gd]),
         "paper": {"ga": [0.40, 0.01], "gradient_descent": [1.32, 0.55]}}
     print(out["repeatability_all_orders"])
-    write_result("transport_experiments", out)
+    (OUT / "fit_transports.json").write_text(json.dumps(out, indent=2) + "\n")
+    print(f"wrote {OUT / 'fit_transports.json'}")
 
 
 if __name__ == "__main__":
