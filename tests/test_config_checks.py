@@ -98,7 +98,8 @@ CASES = [
     ("volume file missing", _set(["volumes", "tiny"], {"kind": "file", "path": "nope.npy"}), "volumes.tiny.path", "not found"),
     ("photo missing", _set(["photos", "kite", "path"], "resources/photos/nope.jpg"), "photos.kite.path", "not found"),
     ("mask missing", _set(["photos", "kite", "mask"], "nope_mask.png"), "photos.kite.mask", "not found"),
-    ("tile example missing", _set(["tiles", "grass", "path"], "nope.png"), "tiles.grass.path", "not found"),
+    ("tile example missing", lambda c: c["tiles"]["grass"].update(path="nope.png", product=None), "tiles.grass.path",
+     "not found"),
     ("recolour photo missing", _set(["recolour", "tiny_flower", "photo"], "nope.jpg"), "recolour.tiny_flower.photo",
      "not found"),
     ("petal shape missing", _set(["patterns", "tiny_spot", "shape"], {"kind": "file", "path": "nope.png"}),
@@ -138,6 +139,17 @@ CASES = [
     ("fit extinction above 1 /m", _set(["fit", "ranges"], {"extinction": [0.02, 3.0]}), "fit.ranges.extinction",
      "physical range"),
     ("g not increasing", _set(["precompute", "g"], [0.5, 0.5]), "precompute.g", "strictly increasing"),
+    # feature-aware textures (Dong Ch. 6)
+    ("texture photo missing", _set(["textures", "meadow", "path"], "resources/nope.jpg"), "textures.meadow.path",
+     "not found"),
+    ("texture output smaller than a neighbourhood", _set(["textures", "meadow", "output", "size"], [12, 96]),
+     "textures.meadow.output.size", "largest neighbourhood 16"),
+    ("target scale without the example's", lambda c: c["textures"]["meadow"]["scale"].__setitem__("from", "none"),
+     "textures.meadow.output.scale", "scale feature"),
+    ("tiles example twice", _set(["tiles", "grass", "path"], "resources/textures/grass_meadow_128.png"), "tiles.grass",
+     "exactly one"),
+    ("tiles example of no stage", lambda c: c["tiles"]["grass"].update(path=None, product="textures/nope/synth.png"),
+     "tiles.grass.product", "not in 'textures'"),
 ]
 
 

@@ -24,7 +24,8 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 DOCS = sorted([ROOT / "README.md", ROOT / "CONTRIBUTING.md", ROOT / "config" / "README.md",
                *(ROOT / "docs").rglob("*.md")])
-STAGES = ("volume", "sky", "precompute", "fit", "shots", "mie", "patterns", "leaves", "tiles", "composite")
+STAGES = ("volume", "sky", "precompute", "fit", "shots", "mie", "patterns", "leaves", "tiles", "textures",
+          "composite")
 HISTORY = ("this session", "the issue's", "follow-up)", "honestly", "artefact fixes", "first version of",
            "before the fix", "after the fix", "previous generator", "of today")
 

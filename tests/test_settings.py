@@ -9,6 +9,7 @@ import pytest
 from natscene.config import bundle_schema, settings_from_section
 from natscene.errors import ConfigError
 from natscene.fit.genetic import DEFAULT_RANGES
+from natscene.features.optimisation import OptimisationSettings
 from natscene.fit.settings import FitSettings, GradientSettings, KappaGridSettings, fit_settings
 from natscene.leaves.season import SeasonParams
 from natscene.scatter.allorders import AllOrdersSettings
@@ -33,6 +34,8 @@ PAIRS = [
     (FitSettings, "fit.schema.yaml", [], {"kappa", "gradient"}, {}, {"kappa", "gradient"}),
     (KappaGridSettings, "fit.schema.yaml", ["kappa"], set(), {}, set()),
     (GradientSettings, "fit.schema.yaml", ["gradient"], set(), {}, set()),
+    (OptimisationSettings, "textures.schema.yaml", ["additionalProperties", "optimisation"], set(), {},
+     {"type_mode"}),  # type_mode is textures.<name>.types.mode, set by natscene.features.entry
 ]
 # patterns.*.rd (RDParams) and volumes.* (natscene.volume.procedural.Shape) have no per-key schema defaults on
 # purpose: their defaults depend on a preset / the cloud kind (Dong's Table 3.3 rows, the kinds' shapes), and an

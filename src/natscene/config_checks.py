@@ -132,6 +132,8 @@ def _product_problem(config: dict, product: str, frames: list[int]) -> str | Non
         return None
     if head == "tiles":
         return need("tiles", name, "texture")
+    if head == "textures":
+        return need("textures", name, "texture")
     if head == "patterns":
         if name == "recolour":
             return need("recolour", parts[2], "recoloured photo") if len(parts) > 2 else "names no recoloured photo"
@@ -158,8 +160,8 @@ def _product_problem(config: dict, product: str, frames: list[int]) -> str | Non
         return need("volumes", name, "volume") or (need("views", parts[2], "view") if len(parts) > 2 else None)
     if head in ("mie", "composite"):
         return None
-    return (f"is not a product of any stage (the first folder must be one of shots, tiles, patterns, leaves, "
-            f"sky, fit, volumes, precompute, mie)")
+    return (f"is not a product of any stage (the first folder must be one of shots, tiles, textures, patterns, "
+            f"leaves, sky, fit, volumes, precompute, mie)")
 
 
 def _image_source(p: _Problems, config: dict, root, key: str, src: dict | None, frames: list[int]) -> None:
@@ -287,9 +289,40 @@ def _check_shots(p, config):
                                                       "above the horizon)")
 
 
+def _check_textures(p, config, root):
+    for name, t in (config.get("textures") or {}).items():
+        key = f"textures.{name}"
+        _file(p, root, f"{key}.path", t.get("path"), "example photo")
+        sc, out = t.get("scale") or {}, t.get("output") or {}
+        if sc.get("from") == "mask" and sc.get("mask"):
+            _file(p, root, f"{key}.scale.mask", sc["mask"], "feature mask")
+        if (t.get("types") or {}).get("labels"):
+            _file(p, root, f"{key}.types.labels", t["types"]["labels"], "type label image")
+        if (out.get("scale") or {}).get("kind") == "image":
+            _file(p, root, f"{key}.output.scale.image", out["scale"].get("image"), "target scale-map image")
+        if (out.get("scale") or {}).get("kind", "resample") != "resample" and sc.get("from", "none") == "none":
+            p.add(f"{key}.output.scale", "a target scale map needs the example's scale feature (scale.from is none)")
+        for k in ("types", "colour"):
+            if out.get(k):
+                _file(p, root, f"{key}.output.{k}", out[k], f"target {k} map")
+        sizes, size = (t.get("optimisation") or {}).get("sizes"), out.get("size")
+        if sizes and size and min(size) < max(sizes):
+            W, H = size
+            p.add(f"{key}.output.size", f"{W}x{H} is smaller than the largest neighbourhood {max(sizes)} "
+                                        f"(optimisation.sizes)")
+
+
 def _check_tiles(p, config, root):
     for name, t in (config.get("tiles") or {}).items():
-        _file(p, root, f"tiles.{name}.path", t.get("path"), "example texture")
+        if bool(t.get("path")) == bool(t.get("product")):
+            p.add(f"tiles.{name}", "give the example as exactly one of 'path' (a file) and 'product' (another "
+                                   "stage's product, e.g. textures/<name>/synth.png)")
+        elif t.get("product"):
+            why = _product_problem(config, str(t["product"]), [])
+            if why:
+                p.add(f"tiles.{name}.product", f"{t['product']!r} {why}")
+        else:
+            _file(p, root, f"tiles.{name}.path", t.get("path"), "example texture")
         for i, e in enumerate(t.get("embed") or []):
             _file(p, root, f"tiles.{name}.embed[{i}].path", e.get("path"), "embedded object image")
 
@@ -386,6 +419,7 @@ def config_problems(config: dict, root: str | os.PathLike) -> list[str]:
     _check_keyframes(p, config)
     _check_shots(p, config)
     _check_tiles(p, config, root)
+    _check_textures(p, config, root)
     _check_patterns(p, config, root)
     _check_mie(p, config)
     _check_composite(p, config, root)

@@ -74,6 +74,12 @@ MODEL: dict[str, dict[str, float]] = {  # bytes per unit / MB; n = measured jobs
                                 "collisions": 4.7 / MB},  # n=26 + 2
     "sky": {"base": 204.5, "pixels": 684.8 / MB},  # n=3, max residual 8.9 MB
     "sky_resample": {"base": 184.7, "pixels": 62.58 / MB},  # n=2, max residual 0.0 MB
+    # measured on the main job's three entries (64-82 k example pixels; peak RSS 227-240 MB, 1098-1219 MB with the
+    # lambda-0 baseline, 1005 MB) and the smoke run's (7 k pixels: 241, 280, 268 MB): the example's neighbourhood
+    # vectors of every size dominate
+    "texture_features": {"base": 230.0, "pixels": 130 / MB},
+    "feature_synthesis": {"base": 280.0, "pixels": 12000 / MB, "output_pixels": 0 / MB},
+    "texture_completion": {"base": 270.0, "pixels": 10000 / MB},
     "tile_texture": {"base": 185.2, "pixels": 182 / MB},  # n=5, max residual 40.2 MB
     "tileset": {"base": 184.7, "pixels": 2390 / MB},  # n=4, max residual 0.0 MB
     "volume": {"base": 181.9, "voxels": 40.13 / MB},  # n=6, max residual 7.1 MB
@@ -273,8 +279,21 @@ def job_features(rule: str, config: dict, wildcards: dict, root) -> tuple[str, d
         keys["pixels"] = f"shots.{c['shot']}.resolution" if c.get("shot") else f"composite.{wc['name']}.resolution"
     elif rule == "tileset":
         t = config["tiles"][wc["texture"]]
-        size = image_size(resolve_path(t["path"], root))
-        feats["pixels"], keys["pixels"] = (_pixels(size) if size else 0), f"tiles.{wc['texture']}.path"
+        if t.get("path"):
+            size = image_size(resolve_path(t["path"], root))
+            feats["pixels"], keys["pixels"] = (_pixels(size) if size else 0), f"tiles.{wc['texture']}.path"
+        else:  # another stage's product: a feature-aware synthesis has its configured output size
+            parts = str(t["product"]).split("/")
+            tex = (config.get("textures") or {}).get(parts[1]) if parts[0] == "textures" and len(parts) > 1 else None
+            size = tex["output"]["size"] if tex else None
+            feats["pixels"], keys["pixels"] = (_pixels(size) if size else 0), f"tiles.{wc['texture']}.product"
+    elif rule in ("texture_features", "texture_completion", "feature_synthesis"):
+        t = config["textures"][wc["name"]]
+        size = t.get("working_size") or image_size(resolve_path(t["path"], root))
+        feats["pixels"], keys["pixels"] = (_pixels(size) if size else 0), f"textures.{wc['name']}.working_size"
+        if rule == "feature_synthesis":
+            feats["output_pixels"] = _pixels(t["output"]["size"])
+            keys["output_pixels"] = f"textures.{wc['name']}.output.size"
     elif rule == "tile_texture":
         feats["pixels"], keys["pixels"] = int(wc["w"]) * int(wc["h"]), f"tiles.{wc['texture']}.sizes"
     elif rule in ("pigment_maps", "pattern_color"):
@@ -414,6 +433,11 @@ def planned_jobs(config: dict) -> list[tuple[str, dict, str]]:
         jobs.append(("composite", {"name": c}, f"composite.{c}"))
         if entry.get("reference"):
             jobs.append(("composite_reference", {"name": c}, f"composite.{c}"))
+    for t, spec in (config.get("textures") or {}).items():
+        jobs.append(("texture_features", {"name": t}, f"textures.{t}"))
+        jobs.append(("feature_synthesis", {"name": t}, f"textures.{t}"))
+        if spec.get("complete"):
+            jobs.append(("texture_completion", {"name": t}, f"textures.{t}"))
     for t, spec in (config.get("tiles") or {}).items():
         jobs.append(("tileset", {"texture": t}, f"tiles.{t}"))
         for w, h in spec.get("sizes") or []:

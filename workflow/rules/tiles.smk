@@ -6,7 +6,8 @@ rule tileset:
         meta=f"{RESULTS}/tiles/{{texture}}/tileset.yaml",
         png=f"{RESULTS}/tiles/{{texture}}/tileset.png",
     input:
-        example=lambda wc: src(config["tiles"][wc.texture]["path"]),
+        example=lambda wc: src(config["tiles"][wc.texture]["path"]) if config["tiles"][wc.texture]["path"]
+        else f"{RESULTS}/{config['tiles'][wc.texture]['product']}",
         embed=lambda wc: [src(e["path"]) for e in config["tiles"][wc.texture]["embed"]],
     params:
         spec=lambda wc: only(config["tiles"][wc.texture], "tile_size", "set", "ga", "seams", "seed", "margin", "embed"),

@@ -116,7 +116,8 @@ class _Search:
             if len(ids) < 4000:  # exact for small sets
                 index = faiss.IndexFlatL2(d)
             else:  # inverted lists: k-means cells, the query's 32 nearest cells searched exactly
-                index = faiss.IndexIVFFlat(faiss.IndexFlatL2(d), d, int(2 * np.sqrt(len(ids))))
+                cells = max(1, min(int(2 * np.sqrt(len(ids))), len(ids) // 39))  # faiss wants 39 points a cell
+                index = faiss.IndexIVFFlat(faiss.IndexFlatL2(d), d, cells)
                 index.cp.seed = seed
                 index.train(base[ids])
                 index.nprobe = 32

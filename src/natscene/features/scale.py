@@ -12,7 +12,8 @@ from scipy import ndimage
 
 from natscene.errors import InputError
 
-__all__ = ["scale_from_mask", "scale_from_angles", "scale_region", "copy_region", "scale_preview"]
+__all__ = ["scale_from_mask", "scale_from_angles", "scale_region", "copy_region", "grey_from_scale",
+           "scale_from_grey", "scale_preview"]
 
 
 def scale_from_mask(mask: np.ndarray, n: int = 32, gaussian: int = 13) -> np.ndarray:
@@ -88,7 +89,17 @@ def copy_region(scale: np.ndarray, source: tuple, target: tuple) -> np.ndarray:
     return out
 
 
+def grey_from_scale(scale: np.ndarray) -> np.ndarray:
+    """Scale S -> the grey the thesis draws scale maps in (0.5, i.e. 128, is S = 1; one octave per 0.5):
+    0.5 + 0.5 log2 S. Not clipped: it is the scale feature's value in Eq. 6.3."""
+    return (0.5 + 0.5 * np.log2(np.maximum(scale, 1e-6))).astype(np.float32)
+
+
+def scale_from_grey(grey: np.ndarray) -> np.ndarray:
+    """The inverse of :func:`grey_from_scale`."""
+    return (2.0 ** ((np.asarray(grey, np.float64) - 0.5) * 2.0)).astype(np.float32)
+
+
 def scale_preview(scale: np.ndarray) -> np.ndarray:
-    """A grey image in [0, 1] as the thesis shows scale maps: 0.5 (grey 128) is scale 1, brighter is magnified;
-    log2 scale, one octave to white or black."""
-    return np.clip(0.5 + 0.5 * np.log2(np.maximum(scale, 1e-6)), 0.0, 1.0).astype(np.float32)
+    """The scale map as a grey image in [0, 1] (:func:`grey_from_scale`, clipped)."""
+    return np.clip(grey_from_scale(scale), 0.0, 1.0)
