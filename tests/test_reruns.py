@@ -46,16 +46,20 @@ def test_editing_a_volume_module_reruns_the_volume(smoke_run):
     assert job_counts(snake(repo, workdir, "-n").stdout) == {}
 
 
-def test_comment_and_docstring_edits_plan_nothing(smoke_run):
+@pytest.mark.parametrize("path", ["src/natscene/io.py", "scripts/sky_resample.py"])
+def test_comment_and_docstring_edits_plan_nothing(smoke_run, path):
     """Fingerprints follow the code's meaning: a comment and a docstring added to natscene/io.py (imported by
-    nearly every script) plan no job."""
+    nearly every script) or to a rule script plan no job; a change of the script's code plans its rule."""
     repo, workdir, _ = smoke_run
-    module = repo / "src" / "natscene" / "io.py"
+    module = repo / path
     original = module.read_text()
     try:
         module.write_text(original.replace('"""', '"""An edited docstring. ', 1) + "\n# a comment\n")
         assert module.read_text() != original
         assert job_counts(snake(repo, workdir, "-n").stdout) == {}
+        if path.startswith("scripts/"):
+            module.write_text(original + "\n_AN_EDIT = 1\n")
+            assert "sky_resample" in job_counts(snake(repo, workdir, "-n").stdout)
     finally:
         module.write_text(original)
 

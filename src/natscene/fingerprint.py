@@ -149,12 +149,16 @@ def _file_meaning(path: Path, mtime_ns: int) -> bytes:
 
 
 def script_fingerprint(script: str | Path, package_dir: str | Path = PACKAGE_DIR) -> str:
-    """sha256 (16 hex digits) of the meaning of every natscene file in the script's import closure.
+    """sha256 (16 hex digits) of the meaning of the rule script and of every natscene file in its import closure.
 
-    The script itself is not hashed: Snakemake already tracks a rule's script (by its modification time).
+    The workflow profiles turn Snakemake's own code trigger off (it hashes the script's bytes, so a comment would
+    rerun the rule): this fingerprint, a param of every rule, is what reruns a rule whose code changed.
     """
     package_dir = Path(package_dir).resolve()
     h = hashlib.sha256()
+    script = Path(script)
+    h.update(b"script\0")
+    h.update(_file_meaning(script.resolve(), script.stat().st_mtime_ns))
     for f in import_closure(script, package_dir):
         h.update(str(f.relative_to(package_dir)).encode())
         h.update(b"\0")
