@@ -173,8 +173,9 @@ def synthesise(example: np.ndarray, size: tuple, example_features: np.ndarray | 
     log = log or (lambda msg: None)
     ex = _as3(np.asarray(example, np.float32))
     H, W = int(size[0]), int(size[1])
-    fe = _as3(np.asarray(example_features, np.float32)) if example_features is not None else np.zeros(ex.shape[:2] + (0,), np.float32)
-    ft = _as3(np.asarray(target_features, np.float32)) if target_features is not None else np.zeros((H, W, 0), np.float32)
+    none = np.zeros(ex.shape[:2] + (0,), np.float32), np.zeros((H, W, 0), np.float32)  # no feature channel
+    fe = _as3(np.asarray(example_features, np.float32)) if example_features is not None else none[0]
+    ft = _as3(np.asarray(target_features, np.float32)) if target_features is not None else none[1]
     if fe.shape[:2] != ex.shape[:2] or ft.shape[:2] != (H, W) or fe.shape[2] != ft.shape[2]:
         raise InputError(f"feature maps: example {fe.shape} and target {ft.shape} do not match the example "
                          f"{ex.shape[:2]} and the output {(H, W)}")
