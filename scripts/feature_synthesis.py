@@ -10,6 +10,7 @@ from natscene.color import linear_to_srgb, srgb_to_linear
 from natscene.errors import InputError
 from natscene.features.colour import recolour_regions, transfer_to_largest
 from natscene.features.entry import feature_stack, optimisation_settings, target_stack
+from natscene.features.maps import resample_labels
 from natscene.features.optimisation import synthesise
 from natscene.features.scale import scale_preview
 from natscene.features.type_map import type_map
@@ -33,7 +34,6 @@ def main(snakemake, log):
     f_t, targets = target_stack(maps, out_cfg, (W, H), scale_img, colour_img, key)
     types_t = None
     if maps["types"] is not None:
-        from natscene.features.maps import resample_labels
         types_t = resample_labels(maps["types"], (W, H)) if not snakemake.input.get("types_image") else \
             type_map(io.read_image_u8(snakemake.input.types_image)[..., 0], (H, W), f"config key '{key}.output.types'")
     if types_t is not None:

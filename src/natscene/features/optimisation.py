@@ -31,6 +31,7 @@ from dataclasses import dataclass, field
 
 import cv2
 import numpy as np
+from scipy.spatial import cKDTree
 
 from natscene.errors import InputError
 
@@ -201,7 +202,6 @@ def synthesise(example: np.ndarray, size: tuple, example_features: np.ndarray | 
     tl = lambda a, shape: cv2.resize(a, (shape[1], shape[0]), interpolation=cv2.INTER_NEAREST)  # noqa: E731
     x = None
     energies, timings = [], {"search_s": 0.0, "estep_s": 0.0}
-    src_y = src_x = None
     for level in range(s.levels):
         E, Fe, Ft = ex_p[level], _as3(fe_p[level]), _as3(ft_p[level])
         h, w = Ft.shape[:2]
@@ -266,7 +266,7 @@ def synthesise(example: np.ndarray, size: tuple, example_features: np.ndarray | 
                 xp = _patches(x, n, oys, oxs)
                 energies.append((level, n, float(neighbourhood_energy(xp, Z[z], FT, FZ[z], s.lam, s.r).sum())))
             log(f"level {level + 1}/{s.levels} ({w}x{h}), neighbourhood {n}: E = {energies[-1][2]:.4g}")
-            src_y, src_x = _sources(eys[z], exs[z], oys, oxs, n, h, w)
+    src_y, src_x = _sources(eys[z], exs[z], oys, oxs, n, h, w)  # of the last (finest) stage
     out_src = np.stack([src_y, src_x], -1).astype(np.int32)
     if known is not None:
         out_src[known > 0.999] = -1
@@ -310,8 +310,6 @@ def _sources(zy, zx, oys, oxs, n, h, w):
     """For each output pixel, the example pixel it comes from through the neighbourhood whose centre is nearest."""
     cy, cx = oys + n / 2.0, oxs + n / 2.0
     yy, xx = np.mgrid[0:h, 0:w]
-    # nearest neighbourhood centre by a coarse grid lookup
-    from scipy.spatial import cKDTree
     _, k = cKDTree(np.c_[cy, cx]).query(np.c_[yy.ravel() + 0.5, xx.ravel() + 0.5])
     sy = zy[k] + (yy.ravel() - oys[k])
     sx = zx[k] + (xx.ravel() - oxs[k])
