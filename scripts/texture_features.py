@@ -3,6 +3,7 @@ import numpy as np
 
 from natscene import io
 from natscene.color import linear_to_srgb
+from natscene.errors import InputError
 from natscene.features.entry import analyse, working_image
 from natscene.features.scale import scale_preview
 from natscene.features.type_map import type_preview
@@ -18,14 +19,23 @@ def main(snakemake, log):
     entry, name = snakemake.params.entry, snakemake.wildcards.name
     key = f"textures.{name}"
     size = entry["working_size"]
-    srgb = linear_to_srgb(working_image(io.read_photo(snakemake.input.photo)[..., :3], size))
+    photo = io.read_photo(snakemake.input.photo)[..., :3]
+    srgb = linear_to_srgb(working_image(photo, size))
     if srgb.shape[-1] == 1:
         srgb = np.repeat(srgb, 3, -1)
+
+    def same_size(img, what):  # before both are resized to working_size
+        if img.shape[:2] != photo.shape[:2]:
+            raise InputError(f"config key '{key}.{what}': {img.shape[1]}x{img.shape[0]}, but the photo "
+                             f"{snakemake.input.photo} is {photo.shape[1]}x{photo.shape[0]}")
+        return img
+
     mask = labels = None
     if snakemake.input.get("mask"):
-        mask = working_image(io.read_mask(snakemake.input.mask), size, nearest=True) > 0.5
+        raw = same_size(io.read_mask(snakemake.input.mask), "scale.mask")
+        mask = working_image(raw, size, nearest=True) > 0.5
     if snakemake.input.get("labels"):
-        raw = io.read_image_u8(snakemake.input.labels)
+        raw = same_size(io.read_image_u8(snakemake.input.labels), "types.labels")
         grey = raw.shape[-1] < 3 or np.ptp(raw[..., :3].astype(int), axis=-1).max() == 0
         labels = working_image(raw[..., 0] if grey else raw[..., :3], size, nearest=True)
     maps = analyse(srgb, entry, mask, labels, key)

@@ -161,6 +161,8 @@ def _write_inputs(d: Path) -> dict:
     io.write_png(p["tex4"], tex[:4, :4], exposure=1.0)
     p["tex64"] = d / "grass_64.png"
     io.write_png(p["tex64"], tex[:64, :64], exposure=1.0)
+    p["flat"] = d / "flat_grey.png"
+    io.write_png(p["flat"], np.full((64, 64, 3), 0.5, np.float32), encoded=True)
     raw = GRASS.read_bytes()
     p["trunc_png"] = d / "grass_cut.png"
     p["trunc_png"].write_bytes(raw[: len(raw) // 3])
@@ -194,6 +196,11 @@ def _input_config(p: dict) -> dict:
             "flower_ok": {"path": "resources/photos/freshflower.jpg", "accept_unusual": True},
         },
         "sky": {"fit_resolutions": [[32, 24]]},
+        "textures": {
+            "small_labels": {"path": str(GRASS), "types": {"labels": str(p["small_mask"])},
+                             "output": {"size": [64, 64]}},
+            "no_edges": {"path": str(p["flat"]), "scale": {"from": "mask"}, "output": {"size": [64, 64]}},
+        },
         "tiles": {
             "tiny4": {"path": str(p["tex4"]), "tile_size": 4, "set": "N1", "sizes": [[16, 16]], "ga": FAST_GA},
             "big_tile": {"path": str(p["tex64"]), "tile_size": 64, "set": "N1", "sizes": [[96, 96]], "ga": FAST_GA},
@@ -265,6 +272,13 @@ INPUT_CASES = {  # name: (target, outputs that must not exist, log, text that mu
                                   ["patterns/recolour/cut_photo/recoloured.exr",
                                    "patterns/recolour/cut_photo/recoloured.png"], "logs/recolour/cut_photo.log",
                                   "kite_60pct.jpg: truncated JPEG"),
+    "textures: label image of another size": ("textures/small_labels/features.png",
+                                              ["textures/small_labels/features.exr",
+                                               "textures/small_labels/features.png"],
+                                              "logs/texture_features/small_labels.log",
+                                              "textures.small_labels.types.labels': 10x10"),
+    "textures: empty feature mask": ("textures/no_edges/features.png", ["textures/no_edges/features.exr"],
+                                     "logs/texture_features/no_edges.log", "the feature mask is empty"),
     "composite: truncated background image": ("composite/cut_bg/0000/final.png",
                                               ["composite/cut_bg/0000/final.png", "composite/cut_bg/0000/hybrid.exr"],
                                               "logs/composite/cut_bg.0000.log", "grass_cut.png: truncated PNG"),
