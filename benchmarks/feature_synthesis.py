@@ -1,7 +1,7 @@
 """Benchmark of the feature-aware synthesis (Dong 2007 Ch. 6): a 512x512 output from a 256x256 example with
 texture optimisation and the control energy of Eq. 6.3 (target <= 20 s on 2 cores), the time of one EM
-iteration against the nearest-neighbour search alone, and plain texture optimisation (lambda 0) on the same
-input as the baseline in the same run. The example is the bundled perspective meadow photo, 256x256 from its
+iteration against the nearest-neighbour search alone, plain texture optimisation (lambda 0) on the same
+input as the baseline in the same run, and the hierarchical-quilting variant of §6.6.1 (target <= 5 s). The example is the bundled perspective meadow photo, 256x256 from its
 middle, with its scale map from slant 50 deg; the target is scale 1 everywhere (the photo made isotropic).
 Writes results/benchmarks/feature_synthesis.json."""
 import time
@@ -13,6 +13,7 @@ from _common import ROOT, write_result
 
 from natscene.color import linear_to_srgb
 from natscene.features.optimisation import OptimisationSettings, synthesise
+from natscene.features.quilting import QuiltingSettings, quilt
 from natscene.features.scale import grey_from_scale, scale_from_angles
 from natscene.io import read_photo
 
@@ -38,7 +39,13 @@ def main():
                      "final_energy": round(r.energies[-1][2], 1)}
         print(name, out[name], flush=True)
     out["target_seconds"] = 20.0
-    out["quilting"] = "not implemented (the hierarchical-quilting variant of §6.6.1)"
+    t0 = time.perf_counter()
+    r = quilt(ex, (512, 512), f_ex, f_t, QuiltingSettings())
+    total = time.perf_counter() - t0
+    out["quilting"] = {"seconds": round(total, 2), "block_search_seconds": round(r.timings["search_s"], 2),
+                       "seam_seconds": round(r.timings["seam_s"], 2), "target_seconds": 5.0,
+                       "speedup_over_eq_6_3": round(out["eq_6_3"]["seconds"] / total, 1)}
+    print("quilting", out["quilting"], flush=True)
     write_result("feature_synthesis", {"example": "grass_meadow_perspective.jpg, 256x256 from its middle",
                                        "output": [512, 512], **out})
 

@@ -1,5 +1,6 @@
 """Rule `feature_synthesis`: a texture of the output size whose feature maps follow the target's (Dong 2007
-§6.6: texture optimisation with the control energy of Eq. 6.3), beside plain texture optimisation on request."""
+§6.6: texture optimisation with the control energy of Eq. 6.3, or hierarchical quilting), beside plain texture
+optimisation on request."""
 import time
 from dataclasses import replace
 
@@ -9,9 +10,10 @@ from natscene import io
 from natscene.color import linear_to_srgb, srgb_to_linear
 from natscene.errors import InputError
 from natscene.features.colour import recolour_regions, transfer_to_largest
-from natscene.features.entry import feature_stack, optimisation_settings, target_stack
+from natscene.features.entry import feature_stack, optimisation_settings, quilting_settings, target_stack
 from natscene.features.maps import resample_labels
 from natscene.features.optimisation import synthesise
+from natscene.features.quilting import quilt
 from natscene.features.scale import scale_preview
 from natscene.features.type_map import type_map
 from natscene.runner import run
@@ -47,17 +49,22 @@ def main(snakemake, log):
         example = linear_to_srgb(np.clip(transfer_to_largest(srgb_to_linear(srgb), maps["colour"]), 0, None))
     st = optimisation_settings(entry, key)
     t0 = time.perf_counter()
-    res = synthesise(example, (H, W), f_ex, f_t, st, example_types=maps["types"], target_types=types_t, log=log.info)
+    if entry["method"] == "quilting":
+        res = quilt(example, (H, W), f_ex, f_t, quilting_settings(entry, key), example_types=maps["types"],
+                    target_types=types_t, log=log.info)
+    else:
+        res = synthesise(example, (H, W), f_ex, f_t, st, example_types=maps["types"], target_types=types_t,
+                         log=log.info)
     t_ours = time.perf_counter() - t0
     out = res.image
     if consistent:
         out = linear_to_srgb(np.clip(recolour_regions(srgb_to_linear(out), targets["colour"], stats), 0, None))
-    log.info(f"{name}: {W}x{H} from {srgb.shape[1]}x{srgb.shape[0]}, features {names or 'none'}"
-             f"{', types ' + st.type_mode if maps['types'] is not None else ''}: {t_ours:.1f} s "
-             f"(search {res.timings['search_s']:.1f} s, E-step {res.timings['estep_s']:.1f} s)")
-    io.write_exr(snakemake.output.exr, srgb_to_linear(out), ["R", "G", "B"],
-                 attrs={"texture": name, "lambda": st.lam, "features": names, "energy": res.energies[-1][2]},
-                 stage="feature_synthesis")
+    log.info(f"{name}: {W}x{H} from {srgb.shape[1]}x{srgb.shape[0]} by {entry['method']}, features "
+             f"{names or 'none'}{', types ' + st.type_mode if maps['types'] is not None else ''}: {t_ours:.1f} s "
+             f"(search {res.timings['search_s']:.1f} s)")
+    attrs = {"texture": name, "method": entry["method"], "features": names, "energy": res.energies[-1][2]}
+    attrs.update({"lambda": st.lam} if entry["method"] == "optimisation" else {"alpha": entry["quilting"]["alpha"]})
+    io.write_exr(snakemake.output.exr, srgb_to_linear(out), ["R", "G", "B"], attrs=attrs, stage="feature_synthesis")
     io.write_png(snakemake.output.png, out, encoded=True)
     # the comparison: example | target scale (if any) | output | plain texture optimisation (lambda = 0)
     panels = [srgb, out]

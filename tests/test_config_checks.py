@@ -144,6 +144,8 @@ CASES = [
      "not found"),
     ("texture output smaller than a neighbourhood", _set(["textures", "meadow", "output", "size"], [12, 96]),
      "textures.meadow.output.size", "largest neighbourhood 16"),
+    ("quilting cell larger than the example", lambda c: c["textures"]["meadow"].update(
+        method="quilting") or c["textures"]["meadow"]["quilting"].update(cell=64), "textures.meadow.quilting.cell", "does not fit in the 96x76"),
     ("target scale without the example's", lambda c: c["textures"]["meadow"]["scale"].__setitem__("from", "none"),
      "textures.meadow.output.scale", "scale feature"),
     ("tiles example twice", _set(["tiles", "grass", "path"], "resources/textures/grass_meadow_128.png"), "tiles.grass",

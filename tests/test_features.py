@@ -7,6 +7,8 @@ independently of the code:
 - synthesis measured from its output: the local texel size (the width of each window's autocorrelation peak, no
   code of the stage involved) follows the target scale map with lambda = 0.5 and not with lambda = 0;
 - the energy of Eq. 6.3 never increases from one EM iteration to the next;
+- hierarchical quilting follows the same target by the same measure, splits cells only where the target varies,
+  and pastes a periodic example seamlessly (every output pixel a copy of the pattern at one common phase);
 - tight type constraints put the example's type region where the target's type map has it (IoU);
 - Reinhard's colour transfer gives each region its saved statistics (CIEDE2000 from colour-science);
 - completion keeps the scale trend of the photo through the hole, where OpenCV's inpainting does not.
@@ -22,6 +24,7 @@ from natscene.features.colour import (lab_rs_to_rgb, recolour_regions, region_st
                                       transfer_to_largest)
 from natscene.features.completion import complete, inpaint_baseline
 from natscene.features.optimisation import OptimisationSettings, synthesise
+from natscene.features.quilting import QuiltingSettings, cells, quilt
 from natscene.features.scale import copy_region, scale_from_angles, scale_from_mask, scale_preview, scale_region
 from natscene.features.type_map import type_map
 
@@ -156,6 +159,47 @@ def test_scale_aware_synthesis_follows_its_target(scale_aware):
     assert plain <= 0.3
 
 
+def test_quilting_follows_its_target(perspective_example, scale_aware):
+    """Hierarchical quilting (alpha 0.5) on the same example and target: the output's texel width correlates
+    >= 0.8 with the target scale map, as texture optimisation's does."""
+    ex, scale = perspective_example
+    _, f_t = scale_aware
+    res = quilt(ex, f_t.shape, scale_preview(scale), f_t, QuiltingSettings())
+    got = _corr(texel_width(res.image), _window_means(f_t))
+    print(f"quilting: texel width vs target scale {got:.3f}")
+    assert got >= 0.8
+    assert (res.source >= 0).all()  # every output pixel copied from the example
+
+
+def test_quilting_cells_split_only_where_the_target_varies():
+    """A target flat on the left half and a steep ramp on the right: the left stays in 32-pixel cells, the right
+    is split down to the smallest cell; the leaves tile the output exactly once, bottom row first."""
+    H, W = 64, 128
+    t = np.zeros((H, W, 1), np.float32)
+    t[:, 64:, 0] = np.linspace(0, 1, 64)[None, :]
+    leaves = cells(t, QuiltingSettings(cell=32, min_cell=8, tolerance=0.05))
+    cover = np.zeros((H, W), int)
+    for y, x, h, w in leaves:
+        cover[y:y + h, x:x + w] += 1
+    assert (cover == 1).all()
+    assert {(h, w) for y, x, h, w in leaves if x < 64} == {(32, 32)}
+    assert {(h, w) for y, x, h, w in leaves if x >= 64} == {(8, 8)}
+    assert leaves[0][0] == 32 and leaves[-1][0] < 32  # the bottom row of cells first
+
+
+def test_quilting_a_periodic_example_is_seamless():
+    """A periodic example (period 16 both ways, random within a period): a block of the least overlap error
+    continues the pattern exactly, so the output is the pattern at one phase everywhere (no seam)."""
+    rng = np.random.default_rng(3)
+    tile = rng.random((16, 16, 3)).astype(np.float32)
+    ex = np.tile(tile, (8, 8, 1))
+    res = quilt(ex, (96, 160), settings=QuiltingSettings(cell=32, epsilon=0.0))
+    phase = (res.source[..., 0] % 16 - np.arange(96)[:, None] % 16) % 16, \
+        (res.source[..., 1] % 16 - np.arange(160)[None, :] % 16) % 16
+    assert len(np.unique(phase[0])) == 1 and len(np.unique(phase[1])) == 1
+    assert res.energies[-1][2] < 1e-6
+
+
 def test_energy_of_eq_6_3_never_increases(scale_aware):
     results, _ = scale_aware
     for res in results.values():
@@ -169,7 +213,7 @@ def test_energy_of_eq_6_3_never_increases(scale_aware):
 def test_tight_types_land_where_the_target_puts_them():
     """An example with a disc of brick (type 1) in gravel (type 0); the target asks for the disc elsewhere and
     bigger: the output pixels copied from the example's type-1 pixels match the target's type-1 region
-    (IoU >= 0.8, tight mode)."""
+    (IoU >= 0.8, tight mode), by texture optimisation and by hierarchical quilting."""
     g = cv2.resize(data.gravel(), (128, 128)).astype(np.float32) / 255
     b = cv2.resize(data.brick(), (128, 128)).astype(np.float32) / 255
     yy, xx = np.mgrid[0:128, 0:128]
@@ -181,12 +225,15 @@ def test_tight_types_land_where_the_target_puts_them():
     res = synthesise(ex, (128, 192), None, None, OptimisationSettings(levels=2, sizes=(16, 8), iterations=3,
                                                                       type_mode="tight"),
                      example_types=types_e, target_types=types_t)
-    sy = np.clip(res.source[..., 0], 0, 127)
-    sx = np.clip(res.source[..., 1], 0, 127)
-    got = types_e[sy, sx] == 1
+    quilted = quilt(ex, (128, 192), settings=QuiltingSettings(cell=16, min_cell=4, type_mode="tight"),
+                    example_types=types_e, target_types=types_t)
     want = types_t == 1
-    iou = (got & want).sum() / (got | want).sum()
-    assert iou >= 0.8, iou
+    for r in (res, quilted):
+        sy = np.clip(r.source[..., 0], 0, 127)
+        sx = np.clip(r.source[..., 1], 0, 127)
+        got = types_e[sy, sx] == 1
+        iou = (got & want).sum() / (got | want).sum()
+        assert iou >= 0.8, iou
 
 
 # -------------------------------------------------------------------------------------------- colour (§6.5)

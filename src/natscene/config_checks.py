@@ -1,4 +1,12 @@
-"""Checks of a schema-valid config that a JSON schema cannot express, run before any job starts.
+"""
+Config checks
+=============
+
+Defines the checks of a schema-valid config that a JSON schema cannot express, run before any job starts:
+
+-   :func:`check_config`: raise :class:`natscene.errors.ConfigError` listing every problem.
+-   :func:`config_problems`: every problem of a config, each with its key path.
+-   :func:`camera_problem`: why a camera is degenerate.
 
 The schema checks each value on its own (types, ranges, allowed keys). This module checks the config as a
 whole, so that no job starts on a config that would fail later with a raw exception naming no key:
@@ -32,6 +40,8 @@ import numpy as np
 
 from natscene.config import resolve_path
 from natscene.errors import ConfigError
+
+__all__ = ["check_config", "config_problems", "camera_problem"]
 
 
 class _Problems:
@@ -305,6 +315,11 @@ def _check_textures(p, config, root):
         for k in ("types", "colour"):
             if out.get(k):
                 _file(p, root, f"{key}.output.{k}", out[k], f"target {k} map")
+        work = t.get("working_size")
+        if t.get("method") == "quilting" and work and min(work) < t["quilting"]["cell"] * (
+                1 + 2 * t["quilting"]["overlap"]):  # (validated: the schema's defaults are in)
+            p.add(f"{key}.quilting.cell", f"a cell with its overlap does not fit in the {work[0]}x{work[1]} example "
+                                          f"(working_size)")
         sizes, size = (t.get("optimisation") or {}).get("sizes"), out.get("size")
         if sizes and size and min(size) < max(sizes):
             W, H = size

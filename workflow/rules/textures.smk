@@ -65,7 +65,7 @@ rule feature_synthesis:
     input:
         unpack(_synthesis_inputs),
     params:
-        entry=lambda wc: only(_texture(wc), "output", "optimisation", "types", "colour"),
+        entry=lambda wc: only(_texture(wc), "output", "method", "optimisation", "quilting", "types", "colour"),
         code=script_fingerprint("feature_synthesis.py"),
     log:
         f"{RESULTS}/logs/feature_synthesis/{{name}}.log",

@@ -1,8 +1,21 @@
-"""One ``textures.<name>`` entry from photo to feature maps to synthesis (the glue of the rules
-``texture_features``, ``feature_synthesis`` and ``texture_completion``; Dong 2007 §6.3-6.7).
+"""
+One texture entry from photo to synthesis
+=========================================
+
+Defines one ``textures.<name>`` entry from photo to feature maps to synthesis (the glue of the rules
+``texture_features``, ``feature_synthesis`` and ``texture_completion``; Dong 2007 §6.3-6.7):
+
+-   :func:`working_image`: the example at its working size.
+-   :func:`analyse`: the example's feature maps (scale, types, colour regions).
+-   :func:`feature_stack`, :func:`target_stack`: the example's and the output's feature channels of Eq. 6.3.
+-   :func:`optimisation_settings`, :func:`quilting_settings`: the entry's settings of the two synthesis methods.
 
 The example is worked on in display-encoded sRGB values in [0, 1] (the neighbourhood distances of texture
 optimisation are perceptual there); the EXR products are linear.
+
+References
+----------
+-   Dong, W. (2007). Rendering Algorithms for Natural Scenes. PhD thesis, Université Henri Poincaré - Nancy I.
 """
 from __future__ import annotations
 
@@ -14,10 +27,11 @@ from natscene.errors import InputError
 from natscene.features.colour import region_stats, segment
 from natscene.features.maps import example_scale, resample_labels, target_scale
 from natscene.features.optimisation import OptimisationSettings
+from natscene.features.quilting import QuiltingSettings
 from natscene.features.scale import grey_from_scale
 from natscene.features.type_map import type_map
 
-__all__ = ["working_image", "analyse", "feature_stack", "target_stack", "optimisation_settings"]
+__all__ = ["working_image", "analyse", "feature_stack", "target_stack", "optimisation_settings", "quilting_settings"]
 
 
 def working_image(img: np.ndarray, size, nearest: bool = False) -> np.ndarray:
@@ -91,4 +105,10 @@ def target_stack(maps: dict, out_cfg: dict, size, scale_image, colour_image, key
 def optimisation_settings(entry: dict, key: str) -> OptimisationSettings:
     from dataclasses import replace
     s = settings_from_section(OptimisationSettings, entry["optimisation"], f"{key}.optimisation")
+    return replace(s, type_mode=entry["types"]["mode"])
+
+
+def quilting_settings(entry: dict, key: str) -> QuiltingSettings:
+    from dataclasses import replace
+    s = settings_from_section(QuiltingSettings, entry["quilting"], f"{key}.quilting")
     return replace(s, type_mode=entry["types"]["mode"])

@@ -1,4 +1,12 @@
-"""Feature-preserved texture optimisation (Dong 2007, §6.6.1, Eq. 6.3, on Kwatra et al. 2005).
+"""
+Feature-preserved texture optimisation
+======================================
+
+Defines the feature-preserved texture optimisation of Dong (2007, §6.6.1, Eq. 6.3, on Kwatra et al. 2005):
+
+-   :func:`synthesise`: an output texture from an example, its feature maps following the target's
+    (:class:`OptimisationSettings`; the result in a :class:`Result`).
+-   :func:`neighbourhood_energy`: the summands of Eq. 6.3 per neighbourhood.
 
 Texture optimisation (Kwatra, Essa, Bobick & Kwatra, *Texture optimization for example-based synthesis*,
 SIGGRAPH 2005) finds an output x whose w x w neighbourhoods x_p, on a grid of spacing w/4, are each close to some
@@ -24,6 +32,12 @@ the current z_p only when it lowers that neighbourhood's own energy, so with the
 majorise-minimise step for r <= 2) the energy never increases from one iteration to the next. Type constraints
 (§6.4, §6.7): ``soft`` treats the type map as one more feature channel; ``tight`` searches a neighbourhood only
 among the example neighbourhoods whose centre has the target's type (the background, type 0, included).
+
+References
+----------
+-   Dong, W. (2007). Rendering Algorithms for Natural Scenes. PhD thesis, Université Henri Poincaré - Nancy I.
+-   Kwatra, V., Essa, I., Bobick, A., & Kwatra, N. (2005). Texture optimization for example-based synthesis.
+    ACM Transactions on Graphics, 24(3), 795–802.
 """
 from __future__ import annotations
 
@@ -34,6 +48,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from natscene.errors import InputError
+from natscene.features.type_map import check_types, soft_type_channels
 
 __all__ = ["OptimisationSettings", "Result", "synthesise", "neighbourhood_energy"]
 
@@ -184,15 +199,9 @@ def synthesise(example: np.ndarray, size: tuple, example_features: np.ndarray | 
         raise InputError(f"type_mode {s.type_mode!r}: soft or tight")
     types_e = types_t = None
     if example_types is not None:
-        types_e = np.asarray(example_types, np.int64)
-        types_t = np.asarray(target_types, np.int64)
-        missing = sorted(set(np.unique(types_t)) - set(np.unique(types_e)))
-        if missing:
-            raise InputError(f"type map: the target's types {missing} are not in the example's type map")
-        if s.type_mode == "soft":  # one more feature channel in the grey units of the thesis' type images
-            b = max(int(types_e.max()), 1)
-            fe = np.concatenate([fe, (types_e / b)[..., None].astype(np.float32)], -1)
-            ft = np.concatenate([ft, (types_t / b)[..., None].astype(np.float32)], -1)
+        types_e, types_t = check_types(example_types, target_types)
+        if s.type_mode == "soft":  # one more feature channel
+            fe, ft = soft_type_channels(fe, ft, types_e, types_t)
     if min(H, W) < min(s.sizes):
         raise InputError(f"output {W}x{H} is smaller than the smallest neighbourhood {min(s.sizes)}")
     rng = np.random.default_rng(s.seed)

@@ -1,8 +1,20 @@
-"""The type feature (Dong 2007, §6.4): the type map of a texture from the user's label image.
+"""
+Type feature of a texture
+=========================
+
+Defines the type feature of Dong (2007, §6.4): the type map of a texture from the user's label image:
+
+-   :func:`type_map`: the type map of a label image; :func:`type_preview`: its grey image.
+-   :func:`check_types`, :func:`soft_type_channels`: the example's and the target's type maps checked, and
+    appended to their feature channels (soft constraint).
 
 T(p) = m_p: 0 for the background, 1..b for the b type features (a different material, a region of interest, a
 foreground object). Label images are read as integers: a grey or palette PNG whose values are the labels, or an
 RGB image whose distinct colours become labels 1..b in order of first appearance (black is the background).
+
+References
+----------
+-   Dong, W. (2007). Rendering Algorithms for Natural Scenes. PhD thesis, Université Henri Poincaré - Nancy I.
 """
 from __future__ import annotations
 
@@ -10,7 +22,7 @@ import numpy as np
 
 from natscene.errors import InputError
 
-__all__ = ["type_map", "type_preview"]
+__all__ = ["type_map", "type_preview", "check_types", "soft_type_channels"]
 
 
 def type_map(labels: np.ndarray, shape: tuple | None = None, source: str = "type map") -> np.ndarray:
@@ -42,3 +54,22 @@ def type_preview(types: np.ndarray) -> np.ndarray:
     """Grey levels as the thesis shows type maps: the background black, types 1..b evenly brighter."""
     b = max(int(types.max()), 1)
     return (types / b).astype(np.float32)
+
+
+def check_types(example_types: np.ndarray, target_types: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The two type maps as int64, after checking that every type of the target is one of the example's."""
+    te, tt = np.asarray(example_types, np.int64), np.asarray(target_types, np.int64)
+    missing = sorted(set(np.unique(tt).tolist()) - set(np.unique(te).tolist()))
+    if missing:
+        raise InputError(f"type map: the target's types {missing} are not in the example's type map")
+    return te, tt
+
+
+def soft_type_channels(example_features: np.ndarray, target_features: np.ndarray, example_types: np.ndarray,
+                       target_types: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The soft-constraint mode (§6.4): the type maps appended to the example's and the target's feature channels
+    (H, W, k) in the grey units of the thesis' type images (:func:`type_preview`)."""
+    te, tt = check_types(example_types, target_types)
+    b = max(int(te.max()), 1)
+    return (np.concatenate([example_features, (te / b)[..., None].astype(np.float32)], -1),
+            np.concatenate([target_features, (tt / b)[..., None].astype(np.float32)], -1))
