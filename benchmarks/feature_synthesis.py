@@ -12,6 +12,7 @@ import numpy as np
 from _common import ROOT, write_result
 
 from natscene.color import linear_to_srgb
+from natscene.config import default_settings
 from natscene.features.optimisation import OptimisationSettings, synthesise
 from natscene.features.quilting import QuiltingSettings, quilt
 from natscene.features.scale import grey_from_scale, scale_from_angles
@@ -24,7 +25,7 @@ def main():
     ex = np.ascontiguousarray(photo[(h - 256) // 2:(h + 256) // 2, (w - 256) // 2:(w + 256) // 2, :3])
     f_ex = grey_from_scale(scale_from_angles(256, 256, 50.0, 0.0))
     f_t = np.full((512, 512), grey_from_scale(np.float32(1.0)), np.float32)
-    st = OptimisationSettings()
+    st = default_settings(OptimisationSettings)
     out = {}
     for name, lam in (("eq_6_3", st.lam), ("plain_lambda0", 0.0)):
         t0 = time.perf_counter()
@@ -40,7 +41,7 @@ def main():
         print(name, out[name], flush=True)
     out["target_seconds"] = 20.0
     t0 = time.perf_counter()
-    r = quilt(ex, (512, 512), f_ex, f_t, QuiltingSettings())
+    r = quilt(ex, (512, 512), f_ex, f_t, default_settings(QuiltingSettings))
     total = time.perf_counter() - t0
     out["quilting"] = {"seconds": round(total, 2), "block_search_seconds": round(r.timings["search_s"], 2),
                        "seam_seconds": round(r.timings["seam_s"], 2), "target_seconds": 5.0,

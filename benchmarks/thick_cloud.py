@@ -145,7 +145,9 @@ def main() -> int:
     ap.add_argument("--volpath-spp", type=int, nargs="+", default=[16, 64])
     ap.add_argument("--baseline", type=Path, help="checkout of the version to compare with (its src/ and config/)")
     a = ap.parse_args()
-    from natscene.scatter.allorders import AllOrdersSettings
+    from dataclasses import replace
+
+    from natscene.scatter.allorders import frame_settings
     from natscene.scatter.mitsuba_scene import render_reference
     from natscene.scatter.render import render
     from natscene.variant import select_variant
@@ -166,7 +168,8 @@ def main() -> int:
            "reference_noise_relative": {k: v / ref[mask].mean() for k, v in ref_noise.items()}}
     render(vol, cam, sun, p, np.zeros(3, np.float32), seed=0, skylight=False, **{**shot, "spp": 1})   # compile
     runs = {}
-    for name, st in (("shot_settings", None), ("cells_1_voxel", AllOrdersSettings(fine_voxels=1, coarse_voxels=1))):
+    shot_st = frame_settings(shot)
+    for name, st in (("shot_settings", shot_st), ("cells_1_voxel", replace(shot_st, fine_voxels=1, coarse_voxels=1))):
         runs[name] = []
         for seed in range(a.seeds):
             t0 = time.perf_counter()

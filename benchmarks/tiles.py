@@ -17,6 +17,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "src"))
 
 from natscene.color import linear_to_srgb  # noqa: E402
+from natscene.config import default_settings  # noqa: E402
 from natscene.io import read_photo  # noqa: E402
 from natscene.tiles.construct import candidate_patches, intermediate_tiles  # noqa: E402
 from natscene.tiles.tile_ga import MatchCost  # noqa: E402
@@ -30,7 +31,7 @@ def main():
     ex = linear_to_srgb(read_photo(ROOT / "resources/textures/grass_meadow_128.png"))
     ts = tile_set("N2")
     t0 = time.perf_counter()
-    r = run_tile_ga(ex, ts, 80, GAParams(), seed=0)
+    r = run_tile_ga(ex, ts, 80, default_settings(GAParams), seed=0)
     ga_s = time.perf_counter() - t0
     # baseline: brute-force evaluation of one chromosome (Eq. 5.1 over all translations)
     from numpy.lib.stride_tricks import sliding_window_view

@@ -215,7 +215,7 @@ def noise_target_only():
 
 def main():
     from natscene.fit.keyframe import fit_keyframe
-    from natscene.scatter.allorders import settings_from_config
+    from natscene.scatter.allorders import frame_settings, settings_from_config
     from natscene.scatter.render import render
     from natscene.scatter.tables import precompute
     from natscene.variant import select_variant
@@ -248,7 +248,8 @@ def main():
         if transport == "dobashi":
             kw.update(orders=pre["n_m"], spp=16)
         else:
-            kw.update(sun_collisions=st.sun_collisions, sky_collisions=st.sky_collisions)
+            kw.update(all_orders=frame_settings({"sun_collisions": st.sun_collisions,
+                                                 "sky_collisions": st.sky_collisions}))
         render(vol, camera, sun, p, products["sky"], **kw)                # warm-up
         t0 = time.perf_counter()
         render(vol, camera, sun, p, products["sky"], **kw)

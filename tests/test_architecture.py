@@ -15,7 +15,8 @@ Layers (CONTRIBUTING.md, "Layout"):
 The folders around the package (``benchmarks/``, ``tools/``, ``experiments/``: flat scripts that put each other on
 ``sys.path``) import no private name of the package or of a script in another folder, and nothing outside
 ``tests/`` imports a module of ``tests/`` (shared scenes live in the package, e.g.
-``natscene.scatter.reference_scene``).
+``natscene.scatter.reference_scene``). Every module declares its public names in ``__all__``, and what the
+repository imports from a module is among them.
 """
 from __future__ import annotations
 
@@ -191,6 +192,53 @@ def test_plain_imports_only(kind):
                 if name in ("import_module", "__import__", "spec_from_file_location"):
                     bad.append(f"{rel(p)}:{node.lineno}: {name}")
     assert not bad, "\n".join(bad)
+
+
+def declared_all(path: Path) -> list[str] | None:
+    """The names of a module's ``__all__`` (a literal list or tuple at module level), or None without one."""
+    for node in ast.parse(path.read_text()).body:
+        targets = node.targets if isinstance(node, ast.Assign) else [node.target] if isinstance(node, ast.AnnAssign) \
+            else []
+        if any(isinstance(t, ast.Name) and t.id == "__all__" for t in targets) and node.value is not None:
+            return [e.value for e in node.value.elts]
+    return None
+
+
+def defined_names(path: Path) -> set[str]:
+    """Names a module binds at its top level (definitions, assignments, imports)."""
+    out = set()
+    for node in ast.parse(path.read_text()).body:
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+            out.add(node.name)
+        elif isinstance(node, (ast.Assign, ast.AnnAssign)):
+            for t in node.targets if isinstance(node, ast.Assign) else [node.target]:
+                out |= {n.id for n in ast.walk(t) if isinstance(n, ast.Name)}
+        elif isinstance(node, (ast.Import, ast.ImportFrom)):
+            out |= {(a.asname or a.name).split(".")[0] for a in node.names}
+    return out
+
+
+def test_every_module_declares_its_public_names():
+    """Each module has an ``__all__`` whose names it defines, and every name that code of the repository imports
+    from a module (the package, scripts, benchmarks, tools, experiments, tests) is in that module's ``__all__``."""
+    problems = []
+    for m, p in MODULES.items():
+        names = declared_all(p)
+        if names is None:
+            problems.append(f"{rel(p)}: no __all__")
+        else:
+            problems += [f"{rel(p)}: __all__ names {n!r}, which it does not define"
+                         for n in names if n not in defined_names(p)]
+    users = list(MODULES.items()) + [(None, p) for folder in ("scripts", "tests", *OUTSIDE)
+                                     for p in sorted((ROOT / folder).rglob("*.py"))]
+    for m, p in users:
+        for target, name, line in imports(p, m):
+            if name is None or target not in MODULES or name.startswith("_"):
+                continue
+            names = declared_all(MODULES[target]) or []
+            if name not in names and name != "*":
+                problems.append(f"{rel(p)}:{line}: imports {name} from {target}, not in its __all__")
+    assert not problems, "\n".join(problems)
 
 
 def outside_problems(root: Path = ROOT) -> list[str]:

@@ -504,7 +504,8 @@ def test_composite_frame_follows_the_shot_frame(tmp_path):
     assert spec.atmosphere.reference_distance == pytest.approx(np.linalg.norm([0.2, 0.3 - 300.0, -1000.0]))
     from natscene.sky.daylight import preetham_rgb
     d = np.array([[0.0, 0.3, 1.0]]) / np.linalg.norm([0.0, 0.3, 1.0])
-    np.testing.assert_allclose(spec.sky(d), preetham_rgb(d, sun_direction(105.0, 3.0)), rtol=1e-6)
+    np.testing.assert_allclose(spec.sky(d), preetham_rgb(d, sun_direction(105.0, 3.0), 3.0, 0.3, 35.0, 1.0),
+                               rtol=1e-6)   # the shots' default sky
     write_yaml(tmp_path / "shots/s/params/0004.yaml", {"sun": {"azimuth": 105.0}})
     with pytest.raises(InputError, match="0004.yaml"):
         build_set(_shot_entry(), 4, str(tmp_path), str(tmp_path), shot)

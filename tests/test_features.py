@@ -19,6 +19,7 @@ import numpy as np
 import pytest
 from skimage import data
 
+from natscene.config import default_settings
 from natscene.errors import InputError
 from natscene.features.colour import (lab_rs_to_rgb, recolour_regions, region_stats, rgb_to_lab_rs, segment,
                                       transfer_to_largest)
@@ -144,7 +145,8 @@ def scale_aware(perspective_example):
     hi, lo = np.percentile(f_ex, [85, 15])
     f_t = np.broadcast_to(np.linspace(hi, lo, W, dtype=np.float32), (H, W)).copy()
     st = dict(levels=3, sizes=(32, 16, 8), iterations=4)
-    return {lam: synthesise(ex, (H, W), f_ex, f_t, OptimisationSettings(lam=lam, **st)) for lam in (0.5, 0.0)}, f_t
+    return {lam: synthesise(ex, (H, W), f_ex, f_t, default_settings(OptimisationSettings, lam=lam, **st))
+            for lam in (0.5, 0.0)}, f_t
 
 
 def test_scale_aware_synthesis_follows_its_target(scale_aware):
@@ -164,7 +166,7 @@ def test_quilting_follows_its_target(perspective_example, scale_aware):
     >= 0.8 with the target scale map, as texture optimisation's does."""
     ex, scale = perspective_example
     _, f_t = scale_aware
-    res = quilt(ex, f_t.shape, scale_preview(scale), f_t, QuiltingSettings())
+    res = quilt(ex, f_t.shape, scale_preview(scale), f_t, default_settings(QuiltingSettings))
     got = _corr(texel_width(res.image), _window_means(f_t))
     print(f"quilting: texel width vs target scale {got:.3f}")
     assert got >= 0.8
@@ -177,7 +179,7 @@ def test_quilting_cells_split_only_where_the_target_varies():
     H, W = 64, 128
     t = np.zeros((H, W, 1), np.float32)
     t[:, 64:, 0] = np.linspace(0, 1, 64)[None, :]
-    leaves = cells(t, QuiltingSettings(cell=32, min_cell=8, tolerance=0.05))
+    leaves = cells(t, default_settings(QuiltingSettings, cell=32, min_cell=8, tolerance=0.05))
     cover = np.zeros((H, W), int)
     for y, x, h, w in leaves:
         cover[y:y + h, x:x + w] += 1
@@ -193,7 +195,7 @@ def test_quilting_a_periodic_example_is_seamless():
     rng = np.random.default_rng(3)
     tile = rng.random((16, 16, 3)).astype(np.float32)
     ex = np.tile(tile, (8, 8, 1))
-    res = quilt(ex, (96, 160), settings=QuiltingSettings(cell=32, epsilon=0.0))
+    res = quilt(ex, (96, 160), settings=default_settings(QuiltingSettings, cell=32, epsilon=0.0))
     phase = (res.source[..., 0] % 16 - np.arange(96)[:, None] % 16) % 16, \
         (res.source[..., 1] % 16 - np.arange(160)[None, :] % 16) % 16
     assert len(np.unique(phase[0])) == 1 and len(np.unique(phase[1])) == 1
@@ -222,10 +224,10 @@ def test_tight_types_land_where_the_target_puts_them():
     types_e = disc.astype(np.int32)
     Y, X = np.mgrid[0:128, 0:192]
     types_t = ((Y - 64) ** 2 + (X - 120) ** 2 < 40 ** 2).astype(np.int32)
-    res = synthesise(ex, (128, 192), None, None, OptimisationSettings(levels=2, sizes=(16, 8), iterations=3,
-                                                                      type_mode="tight"),
+    res = synthesise(ex, (128, 192), None, None,
+                     default_settings(OptimisationSettings, levels=2, sizes=(16, 8), iterations=3, type_mode="tight"),
                      example_types=types_e, target_types=types_t)
-    quilted = quilt(ex, (128, 192), settings=QuiltingSettings(cell=16, min_cell=4, type_mode="tight"),
+    quilted = quilt(ex, (128, 192), settings=default_settings(QuiltingSettings, cell=16, min_cell=4, type_mode="tight"),
                     example_types=types_e, target_types=types_t)
     want = types_t == 1
     for r in (res, quilted):
@@ -270,7 +272,8 @@ def test_completion_keeps_the_scale_trend_where_inpainting_does_not(perspective_
     ex, scale = perspective_example
     hole = np.zeros(ex.shape[:2], bool)
     hole[64:128, 64:128] = True
-    res = complete(ex, hole, scale_preview(scale), OptimisationSettings(levels=2, sizes=(16, 8), iterations=3))
+    res = complete(ex, hole, scale_preview(scale),
+                   default_settings(OptimisationSettings, levels=2, sizes=(16, 8), iterations=3))
     baseline = inpaint_baseline(ex, hole)
     inside = (slice(64, 128), slice(64, 128))
     want = texel_width(ex[inside])
@@ -290,7 +293,8 @@ def test_bad_inputs_are_refused_with_what_is_wrong():
         type_map(np.zeros((32, 64), np.uint8), shape=(64, 64))
     ex = np.zeros((64, 64, 3), np.float32)
     with pytest.raises(InputError, match="not in the example"):
-        synthesise(ex, (64, 64), None, None, OptimisationSettings(type_mode="tight", sizes=(8,), levels=1),
+        synthesise(ex, (64, 64), None, None,
+                   default_settings(OptimisationSettings, type_mode="tight", sizes=(8,), levels=1),
                    example_types=np.zeros((64, 64), int), target_types=np.ones((64, 64), int))
     with pytest.raises(InputError, match="smaller than the smallest neighbourhood"):
-        synthesise(ex, (4, 64), None, None, OptimisationSettings(sizes=(8,), levels=1))
+        synthesise(ex, (4, 64), None, None, default_settings(OptimisationSettings, sizes=(8,), levels=1))

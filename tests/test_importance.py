@@ -10,6 +10,7 @@ import numpy as np
 import natscene  # noqa: F401
 import mitsuba as mi
 
+from natscene.config import default_settings
 from natscene.scatter.allorders import AllOrdersSettings, Lighting, Scene
 from natscene.scatter.importance import window_targets
 from natscene.scatter.inscatter import voxel_camera_depth
@@ -22,7 +23,7 @@ BANDS = ((2, 4), (5, None))
 
 def _scene(sky=False):
     vol = blob_volume(scale=30.0, n=(24, 16, 24))
-    st = AllOrdersSettings()
+    st = default_settings(AllOrdersSettings)
     return vol, Scene(vol, Lighting(SUN, uniform_dome(0.5) if sky else None), st)
 
 

@@ -20,7 +20,7 @@ from natscene.keyframes.interpolate import (catmull_rom, direction_to_sun_angles
                                             slerp)
 from natscene.keyframes.shot import (bracket, camera_neighbours, frame_state, keyframe_params,
                                      resolve_keyframe, validate_shot)
-from natscene.sky.daylight import preetham_Yxy, preetham_rgb, zenith_Yxy
+from natscene.sky.daylight import preetham_Yxy, shot_sky_radiance, zenith_Yxy
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -201,7 +201,7 @@ def test_preetham_zenith_and_published_values():
     d = np.array([[0.0, 1.0, 0.0]])
     for el in (10, 35, 60):
         ts = np.radians(90 - el)
-        Y, x, y = preetham_Yxy(d, sun_direction(40, el), turbidity=3.0)
+        Y, x, y = preetham_Yxy(d, sun_direction(40, el), turbidity=3.0, min_view_elevation=1.0)
         Yz, xz, yz = zenith_Yxy(ts, 3.0)
         assert Y[0] == pytest.approx(Yz) and x[0] == pytest.approx(xz) and y[0] == pytest.approx(yz)
     # Preetham 1999 eq. (A.2) at T = 2, theta_s = 0: chi = 4pi/9 - pi/60, Yz = 3.1196 tan(chi) + 1.9882
@@ -214,15 +214,15 @@ def test_preetham_zenith_and_published_values():
 
 def test_preetham_sky_darkens_and_reddens_at_sunset():
     cam = Camera((0, 0.3, -2.4), (0, 0.3, 0), fov=40, width=32, height=24)
-    day = preetham_rgb(cam.ray_directions(), sun_direction(180, 35))
-    dusk = preetham_rgb(cam.ray_directions(), sun_direction(180, 3))
+    day = shot_sky_radiance({}, cam.ray_directions(), sun_direction(180, 35))   # the shots' default sky
+    dusk = shot_sky_radiance({}, cam.ray_directions(), sun_direction(180, 3))
     assert day.shape == (24, 32, 3) and np.all(day >= 0)
     assert dusk.mean() < day.mean()
     # the sky is bluer by day than at dusk (ratio blue / red)
     assert day[..., 2].mean() / day[..., 0].mean() > dusk[..., 2].mean() / dusk[..., 0].mean()
     # brighter toward the sun than away from it, at the same elevation
     d = np.array([sun_direction(180 + a, 10) for a in (10, 180)])
-    rgb = preetham_rgb(d, sun_direction(180, 10))
+    rgb = shot_sky_radiance({}, d, sun_direction(180, 10))
     assert rgb[0].sum() > rgb[1].sum()
 
 

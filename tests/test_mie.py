@@ -173,11 +173,12 @@ def test_glory_view_shows_mie_backscatter_colours(table, sphere_solution):
     sol0 = solve(pts, table, passes=0)
     centre = np.array([0.0, 0.5, 0.0])
     cam = Camera(tuple(centre + 3 * sun), tuple(centre), (0, 1, 0), 3.0, 5, 5)
-    img = render_mie(vol, cam, sun, sol0, table, {"L_in": 1.0, "L_amb": 0.0})[2, 2]
+    img = render_mie(vol, cam, sun, sol0, table, {"L_in": 1.0, "L_amb": 0.0, "c_in": [1, 1, 1]})[2, 2]
     back = table.rgb[-1]
     assert img / img[1] == pytest.approx(back / back[1], rel=0.02)
     hg = hg_table(float(table.g[1]))
-    img_hg = render_mie(vol, cam, sun, solve(pts, hg, passes=0), hg, {"L_in": 1.0, "L_amb": 0.0})[2, 2]
+    img_hg = render_mie(vol, cam, sun, solve(pts, hg, passes=0), hg, {"L_in": 1.0, "L_amb": 0.0,
+                                                                       "c_in": [1, 1, 1]})[2, 2]
     assert np.allclose(img_hg / img_hg[1], 1.0, atol=1e-5)
 
 

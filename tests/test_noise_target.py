@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 import natscene  # noqa: F401
+from natscene.config import default_settings
 from natscene.errors import InputError
 from natscene.scatter.allorders import AllOrdersSettings, Lighting, Scene, budget_scale, standard_error, view_images
 from natscene.scatter.bands import band_weights
@@ -19,7 +20,7 @@ SIGMA, G, BETA = 0.5, 0.85, 0.99
 
 def _composed(vi):
     """The two halves of the sun's composed multiple scattering at BETA."""
-    c = band_weights(AllOrdersSettings().sun_bands, vi.sun_ratios, BETA)[0]
+    c = band_weights(default_settings(AllOrdersSettings).sun_bands, vi.sun_ratios, BETA)[0]
     return [np.tensordot(c, vi.sun_halves[h], 1) for h in range(2)]
 
 
@@ -36,8 +37,8 @@ def _estimate(vi):
 
 
 def _node(vol, collisions, seed, target=(0.0, 0.0)):
-    st = AllOrdersSettings(sun_collisions=collisions, fine_voxels=1, coarse_voxels=2, noise_target=target,
-                           max_budget_scale=16.0)
+    st = default_settings(AllOrdersSettings, sun_collisions=collisions, fine_voxels=1, coarse_voxels=2,
+                          noise_target=target, max_budget_scale=16.0)
     return view_images(Scene(vol, Lighting(SUN), st), CAM, SIGMA, G, seed=seed, noise=_estimate)
 
 
@@ -90,8 +91,8 @@ def test_a_topped_up_node_meets_its_target_with_the_error_it_estimates():
 
 def test_bad_noise_target():
     vol = blob_volume(scale=30.0, n=(24, 16, 24))
-    for st, key in ((AllOrdersSettings(noise_target=(0.03, 1.5)), "noise_target"),
-                    (AllOrdersSettings(noise_target=(0.03,)), "noise_target"),
-                    (AllOrdersSettings(max_budget_scale=0.5), "max_budget_scale")):
+    for st, key in ((default_settings(AllOrdersSettings, noise_target=(0.03, 1.5)), "noise_target"),
+                    (default_settings(AllOrdersSettings, noise_target=(0.03,)), "noise_target"),
+                    (default_settings(AllOrdersSettings, max_budget_scale=0.5), "max_budget_scale")):
         with pytest.raises(InputError, match=f"precompute.all_orders.{key}"):
             precompute(vol, CAM, SUN, extinctions=[15.0], gs=[0.5], all_orders=st)

@@ -7,6 +7,7 @@ import pytest
 
 from natscene import io
 from natscene.color import LUMA_709
+from natscene.config import default_settings
 from natscene.errors import InputError
 from natscene.sky.extract import SkySettings, extract_sky
 from natscene.sky.laplace import laplace_residual, solve_laplace
@@ -151,11 +152,11 @@ def test_greyscale_and_cloudless_photos_raise():
         extract_sky(grey[..., :1])
     blue = np.broadcast_to(sky_gradient(40, 30), (30, 40, 3)).astype(np.float32)
     with pytest.raises(InputError, match="cloud"):
-        extract_sky(blue, SkySettings(threshold=0.01))
+        extract_sky(blue, default_settings(SkySettings, threshold=0.01))
     white = np.full((30, 40, 3), 0.8, np.float32)
     white[..., 2] += np.linspace(0, 0.01, 40)  # not quite grey, but no sky anywhere
     with pytest.raises(InputError, match="no sky"):
-        extract_sky(white, SkySettings(threshold=5.0))
+        extract_sky(white, default_settings(SkySettings, threshold=5.0))
 
 
 def test_overcast_grey_warns_not_fails():

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from natscene import io
-from natscene.config import settings_from_section
+from natscene.config import default_settings, settings_from_section
 from natscene.errors import InputError
 from natscene.sky.extract import SkySettings, extract_sky
 from natscene.sky.plausibility import PlausibilityLimits, findings, measure
@@ -42,7 +42,7 @@ def dark_overcast(kite) -> np.ndarray:
 
 
 def _extract(photo, **kw):
-    return extract_sky(photo, SkySettings(**kw), name="test.jpg (photos.test)", key="photos.test")
+    return extract_sky(photo, default_settings(SkySettings, **kw), name="test.jpg (photos.test)", key="photos.test")
 
 
 GOOD = {
@@ -125,8 +125,8 @@ def test_non_finite_values_are_always_refused(kite):
 
 def test_limits_are_configurable(kite):
     m = measure(kite, _extract(kite).labels, _extract(kite).sun.c_in)
-    assert findings(m, PlausibilityLimits()) == []
-    assert findings(m, PlausibilityLimits(min_sky_fraction=0.9))  # the kite photo has 84 % sky
+    assert findings(m, default_settings(PlausibilityLimits)) == []
+    assert findings(m, default_settings(PlausibilityLimits, min_sky_fraction=0.9))  # the kite photo has 84 % sky
     assert settings_from_section(PlausibilityLimits, {"sun_cct_k": [1000, 3000]}, "sky.checks").sun_cct_k == (1000, 3000)
 
 

@@ -27,6 +27,7 @@ import numpy as np
 import pytest
 
 import natscene  # noqa: F401
+from natscene.config import default_settings
 from natscene.phase import hg
 from natscene.scatter.allorders import AllOrdersSettings, Lighting, Scene, view_images
 from natscene.scatter.bands import band_weights
@@ -39,12 +40,12 @@ TAUS = (1.0, 10.0, 100.0, 300.0)
 GS = (0.0, 0.85)
 BETAS = (0.99, 0.9999, 1.0)
 SUNS = {0: (1.0, np.cos(np.radians(30))), 60: (0.5, 1.0)}          # sun zenith -> (mu0, mu of the view)
-SETTINGS = AllOrdersSettings(sun_collisions=4_000_000, sky_collisions=0, fine_voxels=1, coarse_voxels=1,
-                             camera_lobe=0.0, importance=False)
-FLUX = AllOrdersSettings(sun_collisions=1_500_000, sky_collisions=0, fine_voxels=1, coarse_voxels=1,
-                         camera_lobe=0.0, importance=False)     # 12 views per flux: fewer photons per view
-DOME = AllOrdersSettings(sun_collisions=20_000, sky_collisions=4_000_000, fine_voxels=1, coarse_voxels=1,
-                         camera_lobe=0.0, importance=False, sky_lobe_share=0.0)
+SETTINGS = default_settings(AllOrdersSettings, sun_collisions=4_000_000, sky_collisions=0, fine_voxels=1,
+                            coarse_voxels=1, camera_lobe=0.0, importance=False)
+FLUX = default_settings(AllOrdersSettings, sun_collisions=1_500_000, sky_collisions=0, fine_voxels=1, coarse_voxels=1,
+                        camera_lobe=0.0, importance=False)     # 12 views per flux: fewer photons per view
+DOME = default_settings(AllOrdersSettings, sun_collisions=20_000, sky_collisions=4_000_000, fine_voxels=1,
+                        coarse_voxels=1, camera_lobe=0.0, importance=False, sky_lobe_share=0.0)
 _X, _W = np.polynomial.legendre.leggauss(12)
 GL_MU, GL_W = (_X + 1) / 2, _W / 2                  # Gauss-Legendre on [0, 1]
 ABS_FLOOR = 1e-3

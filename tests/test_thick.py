@@ -19,8 +19,9 @@ import numpy as np
 import pytest
 
 import natscene  # noqa: F401
+from natscene.config import default_settings
 from natscene.geometry import Camera
-from natscene.scatter.allorders import AllOrdersSettings, Lighting, Scene, view_images
+from natscene.scatter.allorders import AllOrdersSettings, Lighting, Scene, frame_settings, view_images
 from natscene.scatter.bands import band_weights
 from natscene.scatter.compose import compose
 from natscene.scatter.reference_scene import CAM, K, NOSKY, SETTINGS, SUN, blob_volume
@@ -29,7 +30,7 @@ from natscene.scatter.single import march_view
 from natscene.scatter.skylight import uniform_dome
 from natscene.scatter.tables import load_tables, precompute, save_tables
 
-from test_transport import _ratios
+from test_transport import RENDER_SETTINGS, _ratios
 
 REFS = Path(__file__).parent / "data" / "transport_volpath_thick.npz"
 HEAP = ("blob_t100", "blob_t300")
@@ -80,8 +81,21 @@ def test_thick_heap_render_matches_volpath(refs, heap_tables, name):
     """The forward renderer: the mean of two runs (one run's 8x8 blocks scatter by up to 8 % at depth 300)."""
     vol, tb = heap_tables
     img = np.mean([render(vol, CAM, SUN, _params(refs, name, K), np.zeros(3, np.float32), seed=s, skylight=False,
-                          all_orders=SETTINGS)[..., 0] for s in (5, 6)], axis=0)
+                          all_orders=RENDER_SETTINGS)[..., 0] for s in (5, 6)], axis=0)
     _agree(img, _ref(refs, name), tb.footprint > 0, f"render {name}")
+
+
+@pytest.mark.parametrize("name", HEAP)
+def test_thick_heap_render_by_similarity_matches_volpath(refs, heap_tables, name):
+    """The forward renderer with the high orders by similarity (from order 32, walks up to 65536 orders): the mean
+    of two runs within 3 %, every 8x8 block within 10 % (the exact walk's depth-300 block that reads 11 % low is
+    light that needs more than 4096 collisions)."""
+    from dataclasses import replace
+    vol, tb = heap_tables
+    st = replace(RENDER_SETTINGS, similarity_order=32, max_order=65536)
+    img = np.mean([render(vol, CAM, SUN, _params(refs, name, K), np.zeros(3, np.float32), seed=s, skylight=False,
+                          all_orders=st)[..., 0] for s in (5, 6)], axis=0)
+    _agree(img, _ref(refs, name), tb.footprint > 0, f"render by similarity {name}")
 
 
 def test_white_furnace_at_depth_300():
@@ -89,8 +103,8 @@ def test_white_furnace_at_depth_300():
     pixels: radiance L everywhere (2 % in the mean over the cloud)."""
     vol = blob_volume()
     L = 0.7
-    st = AllOrdersSettings(sun_collisions=20_000, sky_collisions=6_000_000, fine_voxels=1, coarse_voxels=1,
-                           camera_lobe=0.6)
+    st = default_settings(AllOrdersSettings, sun_collisions=20_000, sky_collisions=6_000_000, fine_voxels=1,
+                          coarse_voxels=1, camera_lobe=0.6)
     scene = Scene(vol, Lighting(SUN, uniform_dome(L)), st)
     with np.load(REFS) as z:
         sigma = float(z["blob_t300.params"][0])
@@ -120,9 +134,9 @@ def test_cumulonimbus_by_opacity_band_at_shot_settings(refs):
     cam = Camera(tuple(c[0:3]), tuple(c[3:6]), tuple(c[6:9]), float(c[9]), int(c[10]), int(c[11]))
     sun = refs["cb_day.sun"]
     p = _params(refs, "cb_day", vol.extinction_scale)
-    shot = dict(cfg["shots"]["day_to_sunset"]["render"])
-    img = np.mean([render(vol, cam, sun, p, np.zeros(3, np.float32), seed=s, skylight=False, **shot)[..., 0]
-                   for s in (0, 1)], axis=0)
+    st = frame_settings(cfg["shots"]["day_to_sunset"]["render"])
+    img = np.mean([render(vol, cam, sun, p, np.zeros(3, np.float32), seed=s, skylight=False, all_orders=st,
+                          step_voxels=st.step_voxels, supersample=st.supersample)[..., 0] for s in (0, 1)], axis=0)
     ref = _ref(refs, "cb_day")
     opacity = 1 - march_view(make_medium(vol), cam, [float(refs["cb_day.params"][0])])["T"][0]
     ratios = {}

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 import skimage.data
 
-from natscene.config import load_yaml_config, validate_config
+from natscene.config import default_settings, load_yaml_config, validate_config
 from natscene.errors import ConfigError
 from natscene.tiles.blend import poisson_blend
 from natscene.tiles.construct import construct, from_atlas, intermediate_tiles, to_atlas
@@ -199,10 +199,10 @@ def test_ga_improves_on_random_selection():
     ts = tile_set("N1")
     ratios = []
     for seed in range(3):
-        r = run_tile_ga(ex, ts, 48, GAParams(), seed=seed)
+        r = run_tile_ga(ex, ts, 48, default_settings(GAParams), seed=seed)
         assert r.E <= r.initial_best_E                      # never worse than its initial population
         assert all(a["best"] >= b["best"] for a, b in zip(r.log, r.log[1:]))
-        assert len(r.log) - 1 <= GAParams().n_g
+        assert len(r.log) - 1 <= default_settings(GAParams).n_g
         assert len({tuple(g) for g in r.genes}) == ts.n     # n distinct patches
         assert r.genes.min() >= 0 and (r.genes <= 96 - 48).all()
         assert r.E == pytest.approx(evaluation(r.D, 0.8))
@@ -298,7 +298,7 @@ def _line_msd(tex, s, off):
 def test_synthesised_texture_has_no_visible_seams(name):
     ex = _example(name, 96)
     s, h = 48, 24
-    b = construct(ex, tile_set("N1"), s, GAParams(pop_size=12, n_g=6, n_o=3), seed=2)
+    b = construct(ex, tile_set("N1"), s, default_settings(GAParams, pop_size=12, n_g=6, n_o=3), seed=2)
     # outside the circle the tiles are the intermediate tiles (patch borders kept)
     keep_a, _ = constraint_masks(s, 1.0)
     assert np.array_equal(b.tiles[:, keep_a], b.intermediate[:, keep_a])
@@ -379,7 +379,7 @@ def test_square_region_anisotropic_poisson_build_keeps_edges_and_hides_seams():
     the intermediate tiles'."""
     ex = _example("brick", 96)
     s, h = 48, 24
-    b = construct(ex, tile_set("N1"), s, GAParams(pop_size=12, n_g=6, n_o=3), seed=2, region="square",
+    b = construct(ex, tile_set("N1"), s, default_settings(GAParams, pop_size=12, n_g=6, n_o=3), seed=2, region="square",
                   anisotropic=True, blend="poisson")
     keep = b.extra["keep"]
     assert keep.sum() == 4 * s - 4
@@ -395,7 +395,7 @@ def test_square_region_anisotropic_poisson_build_keeps_edges_and_hides_seams():
     assert mid <= max(others), (mid / np.mean(others), max(others) / np.mean(others))
     assert mid < 0.4 * raw, (mid, raw)
     with pytest.raises(ValueError):
-        construct(ex, tile_set("B"), s, GAParams(pop_size=4, n_g=1, n_o=1), blend="feather")
+        construct(ex, tile_set("B"), s, default_settings(GAParams, pop_size=4, n_g=1, n_o=1), blend="feather")
 
 
 # ------------------------------------------------------------------------------------------ embedment

@@ -10,14 +10,16 @@ References known independently of the code under test:
   transmittance) and energy conservation (reflected + transmitted flux = incident flux at albedo 1);
 - the white furnace: a non-absorbing cloud under a uniform sky of radiance L has radiance L everywhere.
 """
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 import natscene  # noqa: F401
+from natscene.config import default_settings
 from natscene.errors import InputError
-from natscene.scatter.allorders import AllOrdersSettings, Lighting, Scene, view_images
+from natscene.scatter.allorders import AllOrdersSettings, Lighting, Scene, frame_settings, view_images
 from natscene.scatter.bands import SUN_BANDS, band_table, band_weights, check_bands, fit_ratios
 from natscene.scatter.compose import compose
 from natscene.scatter.mitsuba_scene import render_reference
@@ -28,6 +30,17 @@ from natscene.scatter.skylight import Dome, uniform_dome
 from natscene.scatter.tables import load_tables, precompute, save_tables
 
 REFERENCES = Path(__file__).parent / "data" / "transport_volpath.npz"
+
+
+#: SETTINGS as the forward renderer ran them before it took its settings as they are: the angle biasing toward the
+#: camera off, at most one photon per two collisions
+RENDER_SETTINGS = replace(SETTINGS, camera_lobe=0.0, sun_photons_max=SETTINGS.sun_collisions // 2)
+
+
+def _frames(**render):
+    """The all-orders settings of frames rendered with the ``shots.<name>.render`` keys ``render``, at the
+    precompute's tally rate and ground share (the settings these tests were calibrated with)."""
+    return frame_settings({"tally_rate": 1.0, "ground_share": 0.25, **render})
 
 
 @pytest.fixture(scope="module")
@@ -87,7 +100,7 @@ def rendered(vol, tables, references):
     out = {}
     for (s, g, b), ref in references.items():
         img = render(vol, CAM, SUN, _params(s, g, b), np.zeros(3, np.float32), seed=5, skylight=False,
-                     all_orders=SETTINGS)[..., 0]
+                     all_orders=RENDER_SETTINGS)[..., 0]
         tab = compose(tables, _params(s, g, b), np.zeros((CAM.height, CAM.width, 3), np.float32))[0][..., 0]
         out[s, g, b] = _ratios(img, ref, foot, f"render sigma_t={s} g={g} beta={b}") + (
             img[foot].mean() / tab[foot].mean(),)
@@ -134,7 +147,7 @@ def test_slab_reflectance_transmittance_match_long_volpath(g):
                   for k in range(2))[..., 0].mean() / 2
         p = dict(c_in=[1.0] * 3, L_in=1.0, g=g, extinction=vol.extinction_scale, beta=beta, kappa_a=[0.0] * 3)
         ours = np.mean([render(vol, cam, sun, p, np.zeros(3, np.float32), seed=seed, skylight=False,
-                               sun_collisions=16_000_000)[..., 0].mean() for seed in range(4)])
+                               all_orders=_frames(sun_collisions=16_000_000))[..., 0].mean() for seed in range(4)])
         print(f"slab g={g} {'reflected' if above else 'transmitted'}: ours {ours:.5f} volpath {ref:.5f}")
         assert abs(ours / ref - 1) <= 0.02
 
@@ -151,7 +164,7 @@ def test_energy_conservationslab_volume():
     flux = {}
     for above in (True, False):
         L = [render(vol, slab_camera(mu, above, res=8), sun, p, np.zeros(3, np.float32), seed=3,
-                    skylight=False, sun_collisions=3_000_000)[..., 0].mean() for mu in mus]
+                    skylight=False, all_orders=_frames(sun_collisions=3_000_000))[..., 0].mean() for mu in mus]
         flux[above] = 2 * np.pi * float(np.sum(wts * mus * np.asarray(L)))
     total = flux[True] + flux[False] + np.exp(-1.0)
     print(f"R {flux[True]:.4f} + T_diffuse {flux[False]:.4f} + T_direct {np.exp(-1.0):.4f} = {total:.4f}")
@@ -162,7 +175,7 @@ def test_white_furnace():
     """Sun off, a uniform dome of radiance L (sky and ground), a non-absorbing cloud: radiance L everywhere."""
     vol = blob_volume(scale=30.0)
     L = 0.7
-    st = AllOrdersSettings(sun_collisions=20_000, sky_collisions=6_000_000, camera_lobe=0.6)
+    st = default_settings(AllOrdersSettings, sun_collisions=20_000, sky_collisions=6_000_000, camera_lobe=0.6)
     scene = Scene(vol, Lighting(SUN, uniform_dome(L)), st)
     for sigma in (0.3, 1.0):
         vi = view_images(scene, CAM, sigma, 0.85, seed=4)
@@ -222,7 +235,7 @@ def test_phase_free_tallies_of_a_walk_sum_to_its_collisions(sigma, g, rate, n):
     finished the last walks of an earlier tracer gave 0.65 and 0.94 of the collisions' power at sigma_t 1."""
     from natscene.scatter.photons import trace
     vol = blob_volume(scale=30.0, n=(24, 16, 24))
-    scene = Scene(vol, Lighting(SUN, None), AllOrdersSettings())
+    scene = Scene(vol, Lighting(SUN, None), default_settings(AllOrdersSettings))
     t = trace(scene.med, scene.grid, scene.sun, sigma, g, CAM.position, n, ((1, 1), (2, None)),
               caches=((4, None),), seed=3, k_min=1, tally_rate=rate, phase=False)
     ratio = t.numerators[0].sum() / (t.collisions * scene.sun.area / n)
@@ -270,14 +283,14 @@ def test_sky_dome_lights_the_shadow_side(vol):
     pixels gain light, and a dome with zero radiance gives exactly the sun-only image."""
     p = dict(c_in=[1.0] * 3, L_in=3.0, g=0.85, extinction=0.5 * K, beta=0.99, kappa_a=[0.0] * 3)
     sky = np.full(3, 0.3, np.float32)
-    dark = render(vol, CAM, SUN, p, sky, seed=1, skylight=False, sun_collisions=1_000_000)
-    zero = render(vol, CAM, SUN, p, sky, seed=1, dome=Dome(np.zeros((4, 8, 3)), np.zeros(3)),
-                  ground_albedo=0.0, sun_collisions=1_000_000, sky_collisions=50_000)
-    lit = render(vol, CAM, SUN, p, sky, seed=1, dome=uniform_dome(0.3), sun_collisions=1_000_000,
-                 sky_collisions=2_000_000)
+    dark = render(vol, CAM, SUN, p, sky, seed=1, skylight=False, all_orders=_frames(sun_collisions=1_000_000))
+    zero = render(vol, CAM, SUN, p, sky, seed=1, dome=Dome(np.zeros((4, 8, 3)), np.zeros(3)), ground_albedo=0.0,
+                  all_orders=_frames(sun_collisions=1_000_000, sky_collisions=50_000))
+    lit = render(vol, CAM, SUN, p, sky, seed=1, dome=uniform_dome(0.3),
+                 all_orders=_frames(sun_collisions=1_000_000, sky_collisions=2_000_000))
     assert np.allclose(zero, dark, rtol=1e-5, atol=1e-7)
     cloud = render(vol, CAM, SUN, p, np.zeros(3, np.float32), seed=1, skylight=False, return_components=True,
-                   sun_collisions=100_000)[1]["T"] < 0.5
+                   all_orders=_frames(sun_collisions=100_000))[1]["T"] < 0.5
     shade = dark[..., 0][cloud] < np.percentile(dark[..., 0][cloud], 20)
     assert lit[..., 0][cloud][shade].mean() > 1.2 * dark[..., 0][cloud][shade].mean()
 
@@ -287,7 +300,7 @@ def test_bad_transport_settings(vol):
         precompute(vol, CAM, SUN, extinctions=[0.5 * K], gs=[0.5], transport="bouthors")
     with pytest.raises(InputError, match="precompute.skylight.model"):
         precompute(vol, CAM, SUN, extinctions=[0.5 * K], gs=[0.5], skylight={"model": "hosek"},
-                   all_orders=AllOrdersSettings(sun_collisions=10_000, sky_collisions=10_000))
+                   all_orders=default_settings(AllOrdersSettings, sun_collisions=10_000, sky_collisions=10_000))
     with pytest.raises(InputError, match="shots.<name>.render.transport"):
         render(vol, CAM, SUN, _params(0.5, 0.5, 0.9), np.zeros(3), transport="bouthors")
     with pytest.raises(InputError, match="precompute.n_m"):

@@ -1,17 +1,17 @@
 """First-order similarity for the high orders of the all-orders transport: time and error against volpath.
 
-Applies ``similarity.patch`` (a photon from order ``similarity_order`` on, optionally only deeper than
-``similarity_depth`` optical depths from the camera, walks the similar medium: extinction (1 - g) mu_t,
-isotropic scattering, its tallies and order count scaled by 1 / (1 - g); Zhao, Wu, Ramamoorthi & Bala 2014 use
-such relations for the high orders) and traces the sun's light through the blob of natscene.scatter.reference_scene at
-12 M collisions, against the stored 8192-spp Mitsuba volpath renders (tests/data/transport_volpath.npz):
+From order ``similarity_order`` on a photon walks the similar medium (extinction (1 - g) mu_t, isotropic, each
+collision a geometric number of real ones; ``precompute.all_orders.similarity_order``, Zhao, Ramamoorthi & Bala
+2014 use such relations for the high orders). Traces the sun's light through the blob of
+natscene.scatter.reference_scene at 12 M collisions against the stored 8192-spp Mitsuba volpath renders
+(tests/data/transport_volpath.npz):
 
-    git apply experiments/similarity/similarity.patch
-    .venv/bin/python experiments/similarity/run.py 0:0,16:0,8:0,4:0,4:3,4:5,8:3
-    git apply -R experiments/similarity/similarity.patch
+    .venv/bin/python experiments/similarity/run.py 0 32 16 8 4
 
-Each argument is ``order:depth`` (0:0 is the exact walk). Printed per case: seconds, photons, the mean ratio to
-volpath over the cloud, the range of the 8x8 block ratios, the median relative half-difference of two halves.
+Each argument is ``order`` or ``order:max_order`` (0 is the exact walk). Printed per case: seconds, photons, the
+mean ratio to volpath over the cloud, the range of the 8x8 block ratios, the median relative half-difference of
+two halves. The thick references (mean optical depth 100 and 300) are compared by tests/test_thick.py
+(``pytest -s -k similarity``).
 """
 import sys
 import time
@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
+from natscene.config import default_settings
 from natscene.phase import hg
 from natscene.scatter.allorders import AllOrdersSettings, Lighting, Scene, view_images
 from natscene.scatter.bands import band_weights
@@ -33,10 +34,10 @@ def main(args):
     vol = blob_volume()
     refs = np.load(ROOT / "tests" / "data" / "transport_volpath.npz")
     for cfg in args:
-        order, depth = (float(v) for v in cfg.split(":"))
-        extra = dict(similarity_order=int(order), similarity_depth=depth) if order > 0 else {}
-        st = AllOrdersSettings(sun_collisions=12_000_000, sky_collisions=200_000, fine_voxels=1, coarse_voxels=1,
-                               camera_lobe=0.6, **extra)
+        order, _, most = cfg.partition(":")
+        extra = dict(similarity_order=int(order), **({"max_order": int(most)} if most else {}))
+        st = default_settings(AllOrdersSettings, sun_collisions=12_000_000, sky_collisions=200_000, fine_voxels=1,
+                              coarse_voxels=1, camera_lobe=0.6, **extra)
         scene = Scene(vol, Lighting(SUN, None), st)
         for s, g, b in CASES:
             t0 = time.perf_counter()
@@ -57,4 +58,4 @@ def main(args):
 
 
 if __name__ == "__main__":
-    main(sys.argv[1:] or ["0:0", "16:0", "8:0", "4:0", "4:3", "4:5", "8:3"])
+    main(sys.argv[1:] or ["0", "32", "16", "8", "4"])

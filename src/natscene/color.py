@@ -1,11 +1,34 @@
-"""Colour-space conversions: the one module that does them (DESIGN §2), with colour-science underneath.
+"""
+Colour-space conversions
+========================
+
+Defines the colour-space conversions of the project: the one module that does them (DESIGN §2), with
+colour-science underneath:
+
+-   :func:`srgb_to_linear`, :func:`linear_to_srgb`: the sRGB transfer function (IEC 61966-2-1) and its inverse.
+-   :func:`luminance`, :data:`LUMA_709`: relative luminance Y of linear sRGB.
+-   :func:`linear_srgb_to_xyz`, :func:`xyz_to_linear_srgb`, :func:`linear_srgb_to_lab`: CIE XYZ and CIE L*a*b*.
+-   :func:`srgb_to_yiq`, :func:`yiq_to_srgb`: NTSC YIQ (Dong 2007, §3.5 works on display RGB).
+-   :func:`cct_duv`: correlated colour temperature and Duv (Ohno's method).
 
 Working space everywhere is linear sRGB / Rec. 709 primaries, D65 white, scene-referred float32.
+
+References
+----------
+-   Dong, W. (2007). Rendering algorithms for natural scenes. PhD thesis, Université Henri Poincaré – Nancy 1.
+-   IEC 61966-2-1:1999. Multimedia systems and equipment – Colour measurement and management – Part 2-1: Colour
+    management – Default RGB colour space – sRGB.
+-   Mansencal, T., Mauderer, M., Parsons, M., et al. Colour: Colour Science for Python (software).
+    https://www.colour-science.org
+-   Ohno, Y. (2014). Practical use and calculation of CCT and Duv. LEUKOS, 10(1), 47–55.
 """
 from __future__ import annotations
 
 import colour
 import numpy as np
+
+__all__ = ["srgb_to_linear", "linear_to_srgb", "luminance", "LUMA_709", "linear_srgb_to_xyz", "xyz_to_linear_srgb",
+           "linear_srgb_to_lab", "srgb_to_yiq", "yiq_to_srgb", "cct_duv"]
 
 #: Rec. 709 luminance weights of linear sRGB (the Y row of the sRGB -> XYZ matrix).
 LUMA_709 = np.array([0.2126, 0.7152, 0.0722], dtype=np.float32)

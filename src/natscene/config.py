@@ -1,17 +1,33 @@
-"""Configuration: load, validate against the JSON-schema (``snakemake.utils.validate``, defaults filled
-in), and turn validation failures into one clear message naming the key path and what was expected.
+"""
+Configuration
+=============
+
+Defines the configuration's loading and validation: load, validate against the JSON-schema
+(``snakemake.utils.validate``, defaults filled in), and turn validation failures into one clear message naming
+the key path and what was expected:
+
+-   :func:`load_yaml_config`, :func:`validate_config`: read a config file, validate it in place.
+-   :func:`bundle_schema`: a schema with every ``$ref`` inlined; :func:`canonical`: a config value's canonical form.
+-   :func:`settings_from_section`, :func:`default_settings`, :func:`complete_section`: config sections as
+    settings dataclasses, with the schema's defaults.
+-   :func:`resolve_path`, :func:`relative_to_root`: config paths and the repository root.
 
 Paths in the config are relative to the repository root (the directory holding the Snakefile) unless
 absolute; :func:`resolve_path` applies that rule.
 """
 from __future__ import annotations
 
+import functools
 import os
 from pathlib import Path
 
 import yaml
 
 from natscene.errors import ConfigError
+
+__all__ = ["load_yaml_config", "validate_config", "bundle_schema", "canonical", "settings_from_section",
+           "default_settings", "complete_section", "schema_section", "section_defaults", "schema_defaults", "SCHEMA_DIR",
+           "resolve_path", "relative_to_root"]
 
 
 def _key_path(path) -> str:
@@ -78,13 +94,17 @@ def bundle_schema(path: str | os.PathLike) -> dict:
 
 def validate_config(config: dict, schema: str | os.PathLike, source: str = "config") -> dict:
     """Validate ``config`` in place (defaults filled in) or raise :class:`ConfigError` naming the key."""
+    return _validate_bundled(config, bundle_schema(schema), source)
+
+
+def _validate_bundled(config: dict, bundled: dict, source: str) -> dict:
+    """:func:`validate_config` against an already bundled schema (a dict)."""
     import json
     import tempfile
 
     import jsonschema
     from snakemake.utils import validate
 
-    bundled = bundle_schema(schema)
     with tempfile.NamedTemporaryFile("w", suffix=".schema.json", delete=False) as f:
         json.dump(bundled, f)
         bundled_path = f.name
@@ -164,12 +184,87 @@ def relative_to_root(path: str | os.PathLike, root: str | os.PathLike) -> str:
         return str(p)
 
 
-def settings_from_section(cls, section: dict | None, key: str):
-    """A settings dataclass ``cls`` from a validated config section: the one way the library turns config into
-    settings.
+#: The workflow's JSON schemas: the one home of the config's defaults, which the library reads too
+#: (:func:`schema_defaults`; natscene is installed editable, in its repository).
+SCHEMA_DIR = Path(__file__).resolve().parents[2] / "workflow" / "schemas"
 
-    - ``section`` holds the values (the schema filled its defaults in); a key missing from it takes the
-      dataclass's default, which equals the schema's (``tests/test_settings.py`` checks every pair);
+
+@functools.lru_cache(maxsize=None)
+def _bundled(file: str) -> dict:
+    path = SCHEMA_DIR / file
+    if not path.is_file():
+        raise ConfigError(f"schema {path} not found: natscene reads its settings' defaults from workflow/schemas "
+                          f"of its repository (install it editable: pip install -e .)")
+    return bundle_schema(path)
+
+
+def schema_section(file: str, path=()) -> dict:
+    """The schema of one config section: in ``workflow/schemas/<file>`` (bundled), the object at ``path``, a
+    sequence of property names (``additionalProperties`` steps into the entries of a mapping)."""
+    node = _bundled(file)
+    for part in path:
+        node = node[part] if part == "additionalProperties" else node["properties"][part]
+    return node
+
+
+def complete_section(section: dict | None, file: str, path=(), key: str = "config") -> dict:
+    """A copy of the config section ``section`` validated through its schema (:func:`schema_section`): the
+    schema's defaults filled in (nested objects' too) and :func:`canonical`; :class:`ConfigError` naming ``key``
+    when it is invalid."""
+    import copy
+
+    bundled = {"$schema": _bundled(file).get("$schema"), **schema_section(file, path)}
+    return _validate_bundled(copy.deepcopy(dict(section or {})), bundled, key)
+
+
+def section_defaults(file: str, path=(), keys=None) -> dict:
+    """The schema's defaults of a config section (:func:`schema_section`), of its properties named in ``keys``
+    (None: all): an empty section validated through those properties alone (not the section's ``required``),
+    defaults filled in (nested ones too), :func:`canonical`."""
+    props = schema_section(file, path).get("properties") or {}
+    mine = {k: v for k, v in props.items() if keys is None or k in keys}
+    bundled = {"$schema": _bundled(file).get("$schema"), "type": "object", "properties": mine}
+    return _validate_bundled({}, bundled, f"{file} {'.'.join(path)}")
+
+
+@functools.lru_cache(maxsize=None)
+def _schema_defaults(cls) -> dict:
+    import dataclasses
+
+    renames = getattr(cls, "CONFIG_NAMES", {})
+    fields = {f.name for f in dataclasses.fields(cls) if f.init}
+    out = {}
+    for file, path in getattr(cls, "SCHEMA", ()):
+        props = schema_section(file, path).get("properties") or {}
+        keys = {k for k in props if renames.get(k, k) in fields and k not in out}
+        out.update(section_defaults(file, path, keys))
+    return out
+
+
+def schema_defaults(cls) -> dict:
+    """The schema's defaults of the fields of settings dataclass ``cls``, by config name: for each ``(file,
+    path)`` of ``cls.SCHEMA`` (:func:`schema_section`; the first that has a key wins) an empty section validated
+    through the properties that name a field (defaults filled in, nested ones too, canonical). A fresh copy."""
+    import copy
+
+    return copy.deepcopy(_schema_defaults(cls))
+
+
+def default_settings(cls, **changes):
+    """The settings dataclass ``cls`` of an empty config section (every field the schema's default,
+    :func:`settings_from_section`), with ``changes`` (field names) replaced: the default instance for tests and
+    library callers."""
+    import dataclasses
+
+    return dataclasses.replace(settings_from_section(cls, None, cls.__name__), **changes)
+
+
+def settings_from_section(cls, section: dict | None, key: str):
+    """A settings dataclass ``cls`` from a config section: the one way the library turns config into settings.
+
+    - ``section`` holds the values (validated: the schema filled its defaults in); a key missing from it takes
+      the schema's default (:func:`schema_defaults`: ``cls.SCHEMA`` names the schema sections the fields come
+      from; the dataclass holds no default of its own for a configurable field);
     - a key that names no field raises :class:`ConfigError` naming ``<key>.<name>`` and the allowed names
       (the schema and the dataclass disagree, or an open section such as ``patterns.*.rd`` has a typo);
     - a list becomes a tuple where the field is a tuple (``tuple`` annotation or default);
@@ -181,7 +276,7 @@ def settings_from_section(cls, section: dict | None, key: str):
     fields = {f.name: f for f in dataclasses.fields(cls) if f.init}
     renames = getattr(cls, "CONFIG_NAMES", {})
     kw = {}
-    for name, value in (section or {}).items():
+    for name, value in {**schema_defaults(cls), **(section or {})}.items():
         field = renames.get(name, name)
         if field not in fields:
             allowed = sorted({v: k for k, v in renames.items()}.get(f, f) for f in fields)

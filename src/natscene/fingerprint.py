@@ -1,4 +1,12 @@
-"""Code fingerprints for Snakemake rerun triggers, computed from the code itself.
+"""
+Code fingerprints
+=================
+
+Defines the code fingerprints of the Snakemake rerun triggers, computed from the code itself:
+
+-   :func:`script_fingerprint`: the hash of the meaning of a rule script and of its import closure.
+-   :func:`import_closure`, :func:`closure_modules`: the ``natscene`` files (or module names) a script can execute.
+-   :func:`meaning`: a source text's syntax tree without docstrings.
 
 Snakemake tracks a rule's script but not the library it imports. Every rule passes
 ``code=script_fingerprint("<script>.py")`` as a ``param``: a hash of the *meaning* of every ``natscene``
@@ -20,6 +28,8 @@ import ast
 import hashlib
 from functools import lru_cache
 from pathlib import Path
+
+__all__ = ["script_fingerprint", "import_closure", "closure_modules", "meaning"]
 
 PACKAGE = "natscene"
 PACKAGE_DIR = Path(__file__).resolve().parent

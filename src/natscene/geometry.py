@@ -1,6 +1,15 @@
-"""Scene geometry shared by every stage (DESIGN §3, Geometry): right-handed world, y up; a pinhole
+"""
+Scene geometry
+==============
+
+Defines the scene geometry shared by every stage (DESIGN §3, Geometry): right-handed world, y up; a pinhole
 camera (position, look-at, up, vertical field of view, resolution); the sun as a parallel light given by
-azimuth (degrees from +z toward +x) and elevation (degrees above the horizon).
+azimuth (degrees from +z toward +x) and elevation (degrees above the horizon):
+
+-   :class:`Camera`: the pinhole camera and its rays.
+-   :func:`sun_direction`: the unit vector toward the sun.
+-   :func:`rotate`: a vector rotated about an axis (Rodrigues' formula).
+-   :func:`ray_box`, :func:`box_coverage`: rays against an axis-aligned box, and the share of a frame that sees it.
 
 Pixel (i, j) (row i from the top, column j from the left) looks through its centre. The image's right
 is ``right = normalize(forward x up)``, matching Mitsuba's ``perspective`` sensor with ``fov_axis='y'``
@@ -11,6 +20,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+
+__all__ = ["Camera", "sun_direction", "rotate", "ray_box", "box_coverage"]
 
 
 def sun_direction(azimuth_deg: float, elevation_deg: float) -> np.ndarray:

@@ -1,4 +1,16 @@
-"""Image and file I/O: the only module that touches OpenImageIO (DESIGN §2-3).
+"""
+Image and file I/O
+==================
+
+Defines the image and file I/O of the project, the only module that touches OpenImageIO (DESIGN §2-3):
+
+-   :func:`read_exr`, :func:`write_exr`: OpenEXR images (an :class:`Image`) with named channels and attributes.
+-   :func:`read_photo`, :func:`read_mask`, :func:`read_image_u8`, :func:`check_complete`: photographs, masks and
+    8-bit images, damaged files refused.
+-   :func:`write_png`, :func:`to_srgb8`, :func:`auto_exposure`: the PNG previews and their tone map.
+-   :func:`read_yaml`, :func:`write_yaml`, :func:`write_text`: YAML and text files.
+-   :func:`atomic_path`, :func:`remove_stale_temps`: atomic writes and the temporary files of a killed job.
+-   :func:`texture_lookup_reference`: filtered texture lookups through OpenImageIO (a test reference).
 
 - EXR read/write with any number of named channels, float32 or half, header attributes recording the
   stage, its parameters and the library version;
@@ -31,6 +43,12 @@ import yaml
 from natscene import __version__
 from natscene.color import linear_to_srgb, luminance, srgb_to_linear
 from natscene.errors import InputError
+
+# InputError is natscene.errors'; it is listed because scripts/fit.py and scripts/render_frame.py raise
+# ``io.InputError``.
+__all__ = ["read_exr", "write_exr", "Image", "read_photo", "read_mask", "read_image_u8", "check_complete",
+           "write_png", "to_srgb8", "auto_exposure", "read_yaml", "write_yaml", "write_text", "atomic_path",
+           "remove_stale_temps", "texture_lookup_reference", "InputError"]
 
 ATTR_PREFIX = "natscene:"
 

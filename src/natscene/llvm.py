@@ -1,4 +1,12 @@
-"""Find and export a libLLVM that Dr.Jit's LLVM backend can load (DESIGN §3, "Mitsuba and Dr.Jit").
+"""
+libLLVM for Dr.Jit
+==================
+
+Finds and exports a libLLVM that Dr.Jit's LLVM backend can load (DESIGN §3, "Mitsuba and Dr.Jit"):
+
+-   :func:`configure`: set ``DRJIT_LIBLLVM_PATH`` (run by ``import natscene``).
+-   :func:`find_libllvm`: the best usable libLLVM found, or None.
+-   :func:`check`: render a tiny scene in a subprocess (``python -m natscene.llvm --check``).
 
 Dr.Jit 1.5 refuses LLVM < 15 and aborts at render time with Debian 12's LLVM 15 ("Cannot select
 fminimum"). LLVM 19 (Debian's ``libllvm19``) and the PyPI wheel ``karellen-llvm-core`` (which puts
@@ -16,6 +24,8 @@ import re
 import subprocess
 import sys
 from pathlib import Path
+
+__all__ = ["configure", "find_libllvm", "check"]
 
 MIN_GOOD_VERSION = 16  # 15 aborts at render time, < 15 is refused by Dr.Jit 1.5
 

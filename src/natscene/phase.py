@@ -1,4 +1,12 @@
-"""Henyey–Greenstein phase function, normalised over the sphere (Dobashi 2012 §3, Table 1: g).
+"""
+Henyey–Greenstein phase function
+================================
+
+Defines the Henyey–Greenstein phase function, normalised over the sphere (Dobashi et al. 2012, §3, Table 1: g):
+
+-   :func:`hg`: the phase function on numpy arrays; :data:`INV_4PI`: the isotropic value 1/(4π).
+-   :func:`hg_dr`: the phase function on Dr.Jit arrays.
+-   :func:`hg_sample_cos_dr`: cos θ sampled from HG(g) (Dr.Jit).
 
 p(cos θ, g) = (1 - g²) / (4π (1 + g² - 2 g cos θ)^{3/2}), θ the angle between the propagation directions
 before and after scattering (g > 0: forward scattering). Works on numpy arrays and Dr.Jit arrays; the
@@ -7,12 +15,21 @@ sampler inverts the CDF (g = 0: uniform on the sphere).
 The one implementation of HG in the project: the cloud transport (:mod:`natscene.scatter`, which re-exports
 these names from ``natscene.scatter.phase``), the Mie stage's HG comparison table
 (:func:`natscene.mie.phase.hg_table`) and the volume previews use it.
+
+References
+----------
+-   Dobashi, Y., Iwasaki, W., Ono, A., Yamamoto, T., Yue, Y., & Nishita, T. (2012). An inverse problem approach
+    for automatically adjusting the parameters for rendering clouds using photographs. ACM Transactions on
+    Graphics, 31(6).
+-   Henyey, L. G., & Greenstein, J. L. (1941). Diffuse radiation in the galaxy. Astrophysical Journal, 93, 70–83.
 """
 from __future__ import annotations
 
 import math
 
 import numpy as np
+
+__all__ = ["hg", "hg_dr", "hg_sample_cos_dr", "INV_4PI"]
 
 INV_4PI = 1.0 / (4.0 * math.pi)
 

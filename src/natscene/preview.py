@@ -1,4 +1,10 @@
-"""Text labels on preview images (contact sheets, pattern sheets): the one label painter of the project.
+"""
+Preview labels
+==============
+
+Defines the text labels on preview images (contact sheets, pattern sheets): the one label painter of the project:
+
+-   :func:`label`: paint a line of text on an 8-bit RGB image in one of :data:`STYLES`.
 
 :func:`label` paints a line of text with OpenCV's Hershey simplex font (anti-aliased) on an 8-bit RGB image, in
 one of three looks:
@@ -14,6 +20,8 @@ one of three looks:
 from __future__ import annotations
 
 import numpy as np
+
+__all__ = ["label", "STYLES"]
 
 STYLES = ("outlined", "table", "caption")
 WHITE, BLACK, YELLOW = (255, 255, 255), (0, 0, 0), (255, 255, 0)

@@ -1,4 +1,11 @@
 """Recovery after a killed run: a stale Snakemake lock is cleared when no Snakemake process holds it.
+==================================================================================================
+
+(The title stays on the docstring's first line: ``python -m natscene.recover --help`` shows it.)
+
+-   :func:`clear_stale_locks`: remove the lock files when no Snakemake process works in a directory.
+-   :func:`stale_locks`, :func:`snakemake_processes`: the lock files, and the live Snakemake processes.
+-   :func:`main`: the command line, ``python -m natscene.recover [--directory DIR]``.
 
 A run killed by a signal, a power cut or a lost terminal leaves ``.snakemake/locks/*.lock`` behind, and the next
 ``snakemake`` stops with a ``LockException`` until ``--unlock``. ``make run`` (and ``make smoke``) first run

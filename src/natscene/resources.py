@@ -1,4 +1,17 @@
-"""Honest memory: each rule's ``mem_mb`` computed from its inputs, and jobs that cannot fit refused up front.
+"""
+Memory of the jobs
+==================
+
+Defines honest memory: each rule's ``mem_mb`` computed from its inputs, and jobs that cannot fit refused up
+front:
+
+-   :func:`mem_mb`: the ``mem_mb`` of one job for its rule's ``resources``.
+-   :func:`memory_problems`: the configured jobs whose estimate exceeds what one job may use
+    (:func:`available_memory_mb`).
+-   :func:`estimate_mem_mb`, :func:`declared_mb`, :func:`model_mb`: a job's estimate, from the model
+    :data:`MODEL` with :data:`MARGIN` and :data:`SLACK_MB`.
+-   :func:`job_features`, :func:`planned_jobs`, :func:`grid_file_voxels`: the features of a job, the size-dependent
+    jobs of a config, the voxels of a user grid.
 
 A job's peak resident memory is modelled as ``base + sum_f coef_f * feature_f`` with the features of
 :func:`job_features` (voxels of the volume it reads or makes, pixels of its image, Monte Carlo samples,
@@ -25,6 +38,9 @@ import numpy as np
 
 from natscene.config import resolve_path
 from natscene.errors import ConfigError
+
+__all__ = ["mem_mb", "memory_problems", "available_memory_mb", "estimate_mem_mb", "declared_mb", "model_mb",
+           "MODEL", "MARGIN", "SLACK_MB", "job_features", "planned_jobs", "grid_file_voxels"]
 
 MB = 1024.0 * 1024.0
 MARGIN = 1.2  # declared = MARGIN * model + SLACK_MB
@@ -126,11 +142,11 @@ def volume_voxels(config: dict, name: str, root) -> tuple[int, str]:
     """(voxels, the config key that sets them) of volume ``name`` of ``volumes`` (the Mie demo's deck included:
     it is the volume ``mie.demo.deck`` names)."""
     v = config["volumes"][name]
-    if v.get("kind") == "file" and v.get("path"):
+    if v["kind"] == "file" and v.get("path"):
         n = grid_file_voxels(resolve_path(v["path"], root))
         if n is not None:
             return n, f"volumes.{name}.path"
-    return int(np.prod(v.get("resolution", [128, 96, 128]))), f"volumes.{name}.resolution"
+    return int(np.prod(v["resolution"])), f"volumes.{name}.resolution"
 
 
 def _paths_per_pass(pixels: int, spp: int, batch_spp=None) -> int:
@@ -148,10 +164,10 @@ def _pixels(res) -> int:
 def _table_values(config: dict, pixels: int) -> int:
     """Float values of the precompute tables: 4 single-scattering/geometry images per extinction node, plus per
     (g, extinction) the n_m - 1 orders (dobashi) or the sun's 8 bands and the sky's 3 bands x 4 channels (all_orders)."""
-    pre = config.get("precompute") or {}
-    n_s = len(pre.get("extinction", [0] * 9))
-    n_g = len(pre.get("g", [0] * 10))
-    per_node = _transport(pre.get("transport", "all_orders")).values_per_node(pre)
+    pre = config["precompute"]
+    n_s = len(pre["extinction"])
+    n_g = len(pre["g"])
+    per_node = _transport(pre["transport"]).values_per_node(pre)
     return pixels * n_s * (4 + n_g * per_node)
 
 
@@ -171,14 +187,14 @@ def _texture_pixels(config: dict, src: dict | None, root) -> int:
         if m:
             return int(m.group(1)) * int(m.group(2))
         if src["product"].startswith("leaves/"):  # a season stage: leaves.size squared
-            return int((config.get("leaves") or {}).get("size", 256)) ** 2
+            return int(config["leaves"]["size"]) ** 2
         parts = src["product"].split("/")
         if parts[0] == "patterns" and len(parts) > 2 and parts[1] == "recolour":  # a recoloured flower photo
-            photo = ((config.get("recolour") or {}).get(parts[2]) or {}).get("photo")
+            photo = config["recolour"][parts[2]]["photo"]
             size = image_size(resolve_path(photo, root)) if photo else None
             return _pixels(size) if size else 0
         if parts[0] == "patterns" and len(parts) > 1:  # a pattern map: patterns.<name>.size
-            return _pixels(((config.get("patterns") or {}).get(parts[1]) or {}).get("size", [549, 528]))
+            return _pixels(config["patterns"][parts[1]]["size"])
         return 0
     if "path" in src:
         size = image_size(resolve_path(src["path"], root))
@@ -190,14 +206,13 @@ def _composite_texture_pixels(config: dict, entry: dict, root) -> int:
     """Texture pixels a composite frame holds (natscene.composite.inputs.build_set): the ground texture, each
     distinct flower pattern map (``patterns.<pattern>.size``), each season leaf texture as read and as warped
     onto the maple outline (``meadow.leaves.texture_size`` squared)."""
-    n = _texture_pixels(config, (entry.get("ground") or {}).get("texture"), root)
-    meadow = entry.get("meadow") or {}
-    patterns = config.get("patterns") or {}
-    for pattern in {f["pattern"] for f in meadow.get("flowers") or []}:
-        n += _pixels(patterns.get(pattern, {}).get("size", [549, 528]))
-    leaves = meadow.get("leaves") or {}
+    n = _texture_pixels(config, entry["ground"]["texture"], root)
+    meadow = entry["meadow"]
+    for pattern in {f["pattern"] for f in meadow["flowers"]}:
+        n += _pixels(config["patterns"][pattern]["size"])
+    leaves = meadow.get("leaves") or {}                     # optional, no default
     for src in leaves.get("textures") or []:
-        n += _texture_pixels(config, src, root) + int(leaves.get("texture_size", 256)) ** 2
+        n += _texture_pixels(config, src, root) + int(leaves["texture_size"]) ** 2
     return n
 
 
@@ -208,27 +223,25 @@ def job_features(rule: str, config: dict, wildcards: dict, root) -> tuple[str, d
     keys: dict[str, str] = {}
     model = rule
     if rule == "volume":
-        v = (config.get("volumes") or {}).get(wc["volume"]) or {}
         feats["voxels"], keys["voxels"] = volume_voxels(config, wc["volume"], root)
-        if v.get("kind") == "file":
+        if config["volumes"][wc["volume"]]["kind"] == "file":
             model = "volume_file"  # import: measured the same for float32 and float64 .npy files
     elif rule == "precompute":
-        view = config["views"][wc["view"]]
-        p = _pixels(view.get("resolution", [320, 240]))
+        p = _pixels(config["views"][wc["view"]]["resolution"])
         feats["voxels"], keys["voxels"] = volume_voxels(config, wc["volume"], root)
         feats["pixels"], keys["pixels"] = p, f"views.{wc['view']}.resolution"
         feats["table_values"], keys["table_values"] = _table_values(config, p), f"views.{wc['view']}.resolution"
-        pre = config.get("precompute") or {}
-        model = _transport(pre.get("transport", "all_orders")).memory_model(rule)
+        pre = config["precompute"]
+        model = _transport(pre["transport"]).memory_model(rule)
         if "paths" in MODEL[model]:
-            feats["paths"] = _paths_per_pass(p, pre.get("spp", 256), pre.get("batch_spp"))
+            feats["paths"] = _paths_per_pass(p, pre["spp"], pre["batch_spp"])
             keys["paths"] = "precompute.batch_spp"
     elif rule == "fit":
         kf = config["keyframes"][wc["keyframe"]]
-        p = _pixels(config["views"][kf["view"]].get("resolution", [320, 240]))
+        p = _pixels(config["views"][kf["view"]]["resolution"])
         feats["pixels"], keys["pixels"] = p, f"views.{kf['view']}.resolution"
         feats["table_values"], keys["table_values"] = _table_values(config, p), f"views.{kf['view']}.resolution"
-        model = _transport((config.get("precompute") or {}).get("transport", "all_orders")).memory_model(rule)
+        model = _transport(config["precompute"]["transport"]).memory_model(rule)
     elif rule in ("sky", "sky_resample"):
         ph = config["photos"][wc["photo"]]
         size = image_size(resolve_path(ph["path"], root))
@@ -236,60 +249,59 @@ def job_features(rule: str, config: dict, wildcards: dict, root) -> tuple[str, d
     elif rule == "render_frame":
         shot = config["shots"][wc["shot"]]
         feats["voxels"], keys["voxels"] = volume_voxels(config, shot["volume"], root)
-        p = _pixels(shot.get("resolution", [640, 480]))
+        p = _pixels(shot["resolution"])
         feats["pixels"], keys["pixels"] = p, f"shots.{wc['shot']}.resolution"
-        r = shot.get("render") or {}
-        model = _transport(r.get("transport", "all_orders")).memory_model(rule)
+        r = shot["render"]
+        model = _transport(r["transport"]).memory_model(rule)
         if "collisions" in MODEL[model]:
-            feats["collisions"] = int(r.get("sun_collisions", 0)) + int(r.get("sky_collisions", 0))
+            feats["collisions"] = int(r["sun_collisions"]) + int(r["sky_collisions"])
             keys["collisions"] = f"shots.{wc['shot']}.render.sun_collisions"
         if "paths" in MODEL[model]:
-            feats["paths"] = _paths_per_pass(p, r.get("spp", 16))
+            feats["paths"] = _paths_per_pass(p, r["spp"])
             keys["paths"] = f"shots.{wc['shot']}.resolution"
     elif rule == "point_scatter":
         feats["voxels"], keys["voxels"] = volume_voxels(config, wc["volume"], root)
     elif rule == "mie_render":
-        demo = (config.get("mie") or {}).get("demo") or {}
-        shot = demo.get(wc["shot"]) or {}
+        demo = config["mie"]["demo"]
         # the glory and fogbow (cloud: deck) look at the deck volume, the silver lining at the demo volume
-        name = demo["deck"] if shot.get("cloud", "volume") == "deck" else wc["volume"]
+        name = demo["deck"] if demo[wc["shot"]]["cloud"] == "deck" else wc["volume"]
         feats["voxels"], keys["voxels"] = volume_voxels(config, name, root)
-        feats["pixels"], keys["pixels"] = _pixels(demo.get("resolution", [480, 360])), "mie.demo.resolution"
+        feats["pixels"], keys["pixels"] = _pixels(demo["resolution"]), "mie.demo.resolution"
     elif rule in ("composite", "composite_reference"):
         c = config["composite"][wc["name"]]
         if c.get("shot"):  # frame k of the shot: its camera and resolution
-            p = _pixels(config["shots"][c["shot"]].get("resolution", [640, 480]))
+            p = _pixels(config["shots"][c["shot"]]["resolution"])
             key = f"shots.{c['shot']}.resolution"
         else:
-            p = _pixels(c.get("resolution", [320, 240]))
+            p = _pixels(c["resolution"])
             key = f"composite.{wc['name']}.resolution"
-        spp = int(c.get("spp", 4))
+        spp = int(c["spp"])
         if rule == "composite":
             feats["samples"], keys["samples"] = p * spp, key
         else:
-            wl = c.get("wavelengths") or {}
-            n_wl = int(round((float(wl.get("stop", 780)) - float(wl.get("start", 380))) / float(wl.get("step", 5)))) + 1
+            wl = c["wavelengths"]
+            n_wl = int(round((float(wl["stop"]) - float(wl["start"])) / float(wl["step"]))) + 1
             feats["spectral_samples"], keys["spectral_samples"] = p * spp * n_wl, key
         feats["texture_pixels"] = _composite_texture_pixels(config, c, root)
         keys["texture_pixels"] = f"composite.{wc['name']}.ground.texture"
     elif rule in ("composite_preview", "composite_compare"):
         c = config["composite"][wc["name"]]
-        res = config["shots"][c["shot"]].get("resolution", [640, 480]) if c.get("shot") else c.get("resolution", [320, 240])
+        res = config["shots"][c["shot"]]["resolution"] if c.get("shot") else c["resolution"]
         feats["pixels"] = _pixels(res)
         keys["pixels"] = f"shots.{c['shot']}.resolution" if c.get("shot") else f"composite.{wc['name']}.resolution"
     elif rule == "tileset":
         t = config["tiles"][wc["texture"]]
-        if t.get("path"):
+        if t["path"]:
             size = image_size(resolve_path(t["path"], root))
             feats["pixels"], keys["pixels"] = (_pixels(size) if size else 0), f"tiles.{wc['texture']}.path"
         else:  # another stage's product: a feature-aware synthesis has its configured output size
             parts = str(t["product"]).split("/")
-            tex = (config.get("textures") or {}).get(parts[1]) if parts[0] == "textures" and len(parts) > 1 else None
+            tex = config["textures"].get(parts[1]) if parts[0] == "textures" and len(parts) > 1 else None
             size = tex["output"]["size"] if tex else None
             feats["pixels"], keys["pixels"] = (_pixels(size) if size else 0), f"tiles.{wc['texture']}.product"
     elif rule in ("texture_features", "texture_completion", "feature_synthesis"):
         t = config["textures"][wc["name"]]
-        size = t.get("working_size") or image_size(resolve_path(t["path"], root))
+        size = t["working_size"] or image_size(resolve_path(t["path"], root))
         feats["pixels"], keys["pixels"] = (_pixels(size) if size else 0), f"textures.{wc['name']}.working_size"
         if rule == "feature_synthesis":
             feats["output_pixels"] = _pixels(t["output"]["size"])
@@ -297,36 +309,36 @@ def job_features(rule: str, config: dict, wildcards: dict, root) -> tuple[str, d
     elif rule == "tile_texture":
         feats["pixels"], keys["pixels"] = int(wc["w"]) * int(wc["h"]), f"tiles.{wc['texture']}.sizes"
     elif rule in ("pigment_maps", "pattern_color"):
-        feats["pixels"], keys["pixels"] = _pixels(config["patterns"][wc["pattern"]].get("size", [549, 528])), \
+        feats["pixels"], keys["pixels"] = _pixels(config["patterns"][wc["pattern"]]["size"]), \
             f"patterns.{wc['pattern']}.size"
     elif rule == "pattern_sheet":
-        feats["pixels"] = sum(_pixels(p.get("size", [549, 528])) for p in (config.get("patterns") or {}).values())
+        feats["pixels"] = sum(_pixels(p["size"]) for p in config["patterns"].values())
         keys["pixels"] = "patterns.<name>.size"
     elif rule == "recolour":
         r = config["recolour"][wc["photo"]]
         size = image_size(resolve_path(r["photo"], root))
         feats["pixels"], keys["pixels"] = (_pixels(size) if size else 0), f"recolour.{wc['photo']}.photo"
     elif rule == "leaf_season":
-        lv = config.get("leaves") or {}
-        feats["pixels"] = int(lv.get("size", 256)) ** 2 * len(lv.get("dates") or [1])
+        lv = config["leaves"]
+        feats["pixels"] = int(lv["size"]) ** 2 * len(lv["dates"])
         keys["pixels"] = "leaves.size"
     elif rule == "frame_preview":
         shot = config["shots"][wc["shot"]]
-        feats["pixels"] = _pixels(shot.get("resolution", [640, 480]))
+        feats["pixels"] = _pixels(shot["resolution"])
         keys["pixels"] = f"shots.{wc['shot']}.resolution"
     elif rule == "animation":
         shot = config["shots"][wc["shot"]]
-        feats["pixels"] = _pixels(shot.get("resolution", [640, 480])) * int(shot.get("frames", 24))
+        feats["pixels"] = _pixels(shot["resolution"]) * int(shot["frames"])
         keys["pixels"] = f"shots.{wc['shot']}.resolution"
     elif rule == "filmstrip":
         shot = config["shots"][wc["shot"]]
-        count = min(int(shot.get("frames", 24)), int((shot.get("filmstrip") or {}).get("count", 6)))
-        feats["pixels"] = _pixels(shot.get("resolution", [640, 480])) * count
+        count = min(int(shot["frames"]), int(shot["filmstrip"]["count"]))
+        feats["pixels"] = _pixels(shot["resolution"]) * count
         keys["pixels"] = f"shots.{wc['shot']}.resolution"
     elif rule == "fit_sheet":  # the photo and the top_k ranked renders at the view's resolution
         kf = config["keyframes"][wc["keyframe"]]
-        p = _pixels(config["views"][kf["view"]].get("resolution", [320, 240]))
-        feats["pixels"] = p * (1 + int((config.get("fit") or {}).get("top_k", 10)))
+        p = _pixels(config["views"][kf["view"]]["resolution"])
+        feats["pixels"] = p * (1 + int(config["fit"]["top_k"]))
         keys["pixels"] = f"views.{kf['view']}.resolution"
     return model, feats, keys
 
@@ -407,46 +419,46 @@ def available_memory_mb(global_resources: dict | None = None) -> tuple[int, str]
 def planned_jobs(config: dict) -> list[tuple[str, dict, str]]:
     """(rule, wildcards, config entry) of the size-dependent jobs the configured products need."""
     jobs = []
-    for v in config.get("volumes") or {}:
+    for v in config["volumes"]:
         jobs.append(("volume", {"volume": v}, f"volumes.{v}"))
-    for p in (config.get("precompute") or {}).get("pairs") or []:
+    for p in config["precompute"]["pairs"]:
         jobs.append(("precompute", {"volume": p["volume"], "view": p["view"]}, "precompute.pairs"))
-    for k, kf in (config.get("keyframes") or {}).items():
+    for k, kf in config["keyframes"].items():
         jobs.append(("precompute", {"volume": kf["volume"], "view": kf["view"]}, f"keyframes.{k}"))
         jobs.append(("fit", {"keyframe": k}, f"keyframes.{k}"))
-    for p in config.get("photos") or {}:
+    for p in config["photos"]:
         jobs.append(("sky", {"photo": p}, f"photos.{p}"))
-    for s in config.get("shots") or {}:
+    for s in config["shots"]:
         jobs.append(("render_frame", {"shot": s}, f"shots.{s}"))
         jobs.append(("animation", {"shot": s}, f"shots.{s}"))
-    demo = (config.get("mie") or {}).get("demo") or {}
-    if demo.get("volume"):
+    demo = config["mie"]["demo"]
+    if demo["volume"]:
         jobs.append(("point_scatter", {"volume": demo["volume"]}, "mie.demo.volume"))
-        if demo.get("deck"):
+        if demo["deck"]:
             jobs.append(("point_scatter", {"volume": demo["deck"]}, "mie.demo.deck"))
         for shot in ("glory", "fogbow", "silver_lining"):
             jobs.append(("mie_render", {"volume": demo["volume"], "shot": shot}, "mie.demo"))
-    for s, shot in (config.get("shots") or {}).items():
-        if shot.get("phase") == "mie_blend":  # the point-to-point solutions of the shot volume, one per sun
+    for s, shot in config["shots"].items():
+        if shot["phase"] == "mie_blend":  # the point-to-point solutions of the shot volume, one per sun
             jobs.append(("point_scatter", {"volume": shot["volume"]}, f"shots.{s}.phase"))
-    for c, entry in (config.get("composite") or {}).items():
+    for c, entry in config["composite"].items():
         jobs.append(("composite", {"name": c}, f"composite.{c}"))
-        if entry.get("reference"):
+        if entry["reference"]:
             jobs.append(("composite_reference", {"name": c}, f"composite.{c}"))
-    for t, spec in (config.get("textures") or {}).items():
+    for t, spec in config["textures"].items():
         jobs.append(("texture_features", {"name": t}, f"textures.{t}"))
         jobs.append(("feature_synthesis", {"name": t}, f"textures.{t}"))
-        if spec.get("complete"):
+        if spec["complete"]:
             jobs.append(("texture_completion", {"name": t}, f"textures.{t}"))
-    for t, spec in (config.get("tiles") or {}).items():
+    for t, spec in config["tiles"].items():
         jobs.append(("tileset", {"texture": t}, f"tiles.{t}"))
-        for w, h in spec.get("sizes") or []:
+        for w, h in spec["sizes"]:
             jobs.append(("tile_texture", {"texture": t, "w": w, "h": h}, f"tiles.{t}.sizes"))
-    for p in config.get("patterns") or {}:
+    for p in config["patterns"]:
         jobs.append(("pigment_maps", {"pattern": p}, f"patterns.{p}"))
-    for r in config.get("recolour") or {}:
+    for r in config["recolour"]:
         jobs.append(("recolour", {"photo": r}, f"recolour.{r}"))
-    if config.get("leaves"):
+    if config["leaves"]:
         jobs.append(("leaf_season", {}, "leaves"))
     return jobs
 

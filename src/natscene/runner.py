@@ -1,4 +1,10 @@
-"""The thin-script harness: logging to the rule's log file and the terminal, clean error reporting.
+"""
+Rule script harness
+===================
+
+Defines the thin-script harness: logging to the rule's log file and the terminal, clean error reporting:
+
+-   :func:`run`: call a script's ``main(snakemake, logger)``; bad input is reported in one line.
 
 Every ``scripts/*.py`` ends with ``run(snakemake, main)``. Before ``main`` runs, the temporary files that an
 earlier, killed run of the same job left beside its outputs are removed (:func:`natscene.io.remove_stale_temps`).
@@ -15,6 +21,8 @@ from pathlib import Path
 
 from natscene.errors import ConfigError, InputError
 from natscene.io import remove_stale_temps
+
+__all__ = ["run"]
 
 
 def setup_logging(log_path: str | None, name: str = "natscene") -> logging.Logger:

@@ -1,12 +1,21 @@
-"""Pick the Mitsuba 3 variant at run time (DESIGN §3): ``cuda_ad_*`` where a CUDA GPU works, else
+"""
+Mitsuba variant
+===============
+
+Picks the Mitsuba 3 variant at run time (DESIGN §3): ``cuda_ad_*`` where a CUDA GPU works, else
 ``llvm_ad_*``; ``rgb`` or ``spectral`` as asked. The environment variable ``NATSCENE_MITSUBA_VARIANT``
-forces one. Fails with a clear message when no variant can run.
+forces one. Fails with a clear message when no variant can run:
+
+-   :func:`select_variant`: activate and return the best working variant.
+-   :class:`VariantError`: no variant could be activated.
 """
 from __future__ import annotations
 
 import os
 
 import natscene.llvm  # noqa: F401  (sets DRJIT_LIBLLVM_PATH before drjit is imported)
+
+__all__ = ["select_variant", "VariantError"]
 
 
 class VariantError(RuntimeError):

@@ -2,4 +2,7 @@
 spectral rule. One concept per module: ``set_spec`` (what the set holds), ``inputs`` (config -> set),
 ``meadow`` / ``placement`` (where things go), ``flower``, ``maple``, ``beetle``, ``grass``, ``mesh`` (geometry),
 ``texture`` / ``footprint`` (filtered texturing), ``sky_dome`` (sky radiance and irradiance), ``tracer`` (ray
-casting), ``set_geometry`` (the rays every mode shares), ``renderer`` (hybrid shading), ``full_spectral`` (the reference), ``hybrid`` (the intermediate image)."""
+casting), ``vectors`` (Dr.Jit vector helpers), ``set_geometry`` (the rays every mode shares), ``renderer`` (hybrid
+shading), ``full_spectral`` (the reference), ``hybrid`` (the intermediate image)."""
+
+__all__: list[str] = []  # a map of the package; import the module you need

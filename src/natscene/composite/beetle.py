@@ -1,11 +1,22 @@
-"""Beetles for the set: Dong's gold bug (Chrysina-like scarab) and the jewel-beetle shell (Buprestidae), at
-their natural size (a few centimetres), as triangle meshes.
+"""
+Beetles of the set
+==================
+
+Defines the beetles for the set: Dong's gold bug (Chrysina-like scarab) and the jewel-beetle shell (Buprestidae),
+at their natural size (a few centimetres), as triangle meshes:
+
+-   :func:`beetle_meshes`: the film-coated shell and the chitin legs of a beetle standing on the ground.
+-   :class:`BeetleShape`: a beetle's proportions; :data:`GOLD_BUG`, :data:`JEWEL_BEETLE`: the two beetles.
 
 The shell is what carries the thin film (Dong 2007 §2.5: only the thin-film objects are shaded spectrally):
 elytra (a super-ellipsoid dome, boxier than an ellipsoid, exponent ``elytra_exponent``, tapering to the
 rear), the pronotum (a flatter, wider-than-long dome in front of them) and the head. Legs (three pairs, two
 segments each) and antennae are thin tubes of dark chitin, shaded in RGB. The beetle stands on y = 0 with
 its legs; ``yaw`` turns it about the vertical (0: head toward +z).
+
+References
+----------
+-   Dong, W. (2007). Rendering Algorithms for Natural Scenes. PhD thesis, Université Henri Poincaré - Nancy I.
 """
 from __future__ import annotations
 
@@ -14,6 +25,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from natscene.composite.mesh import TriMesh, merge, rotation_y, superellipsoid, tube
+
+__all__ = ["BeetleShape", "GOLD_BUG", "JEWEL_BEETLE", "beetle_meshes"]
 
 
 @dataclass

@@ -1,6 +1,14 @@
-"""Flowers for the set, built from Dong's pattern-map petals (Dong 2007 Ch. 3: the petal colour maps of
+"""
+Flowers of the set
+==================
+
+Defines the flowers for the set, built from Dong's pattern-map petals (Dong 2007, Ch. 3: the petal colour maps of
 Fig. 3.3 are the textures): several curved petal meshes arranged radially round a centre, a domed centre
-(the stamens) and a stem.
+(the stamens) and a stem:
+
+-   :func:`flower`: the meshes of one flower (:class:`FlowerParts`); :func:`merge_flowers`: those of many.
+-   :func:`petal_mesh`: one petal of a :class:`PetalShape` over a :class:`PetalTexture`.
+-   :func:`petal_base`: the base and extent of a petal texture's opaque region.
 
 Petal surface. The pattern map's alpha gives the petal outline; its base (the vein root, Table 3.2's petal
 base) is the centre of the lowest opaque row. A texel at (u, v) lies at the across-petal offset
@@ -10,6 +18,10 @@ outward, elevation e(d) = e₀ − bend·d/L (a circular arc: P(d) = ((sin e₀ 
 the (radial, up) plane, κ = bend/L); the petal is cupped across its width by ``cup``·x²/(W/2) along the
 local normal (−sin e, cos e). Petal k sits at azimuth 2πk/n + φ₀ (``jitter`` degrees of seeded noise);
 alternate petals open ``stagger`` degrees apart so that overlapping neighbours do not intersect.
+
+References
+----------
+-   Dong, W. (2007). Rendering Algorithms for Natural Scenes. PhD thesis, Université Henri Poincaré - Nancy I.
 """
 from __future__ import annotations
 
@@ -19,6 +31,8 @@ import numpy as np
 
 from natscene.composite.maple import cell_keep
 from natscene.composite.mesh import TriMesh, grid_surface, merge, rotation_axis, superellipsoid, tube
+
+__all__ = ["petal_base", "PetalShape", "PetalTexture", "petal_mesh", "FlowerParts", "flower", "merge_flowers"]
 
 
 def petal_base(alpha: np.ndarray, threshold: float = 0.5) -> tuple[float, float, float, float, float]:

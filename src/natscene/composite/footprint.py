@@ -1,15 +1,31 @@
-"""Texture footprints from ray differentials (Igehy 1999, "Tracing ray differentials"; the form of PBRT's
-``SurfaceInteraction::ComputeDifferentials``), as Dr.Jit expressions (Array3f64 / Float64 in, unevaluated).
+"""
+Texture footprints from ray differentials
+=========================================
+
+Defines texture footprints from ray differentials (Igehy 1999, "Tracing ray differentials"; the form of PBRT's
+``SurfaceInteraction::ComputeDifferentials``), as Dr.Jit expressions (Array3f64 / Float64 in, unevaluated):
+
+-   :func:`texture_derivative`: the (u, v) derivative across one sample spacing toward a neighbour ray.
+-   :func:`tangent_plane_offsets`: a neighbour ray's offset on the tangent plane.
+-   :func:`uv_derivatives`: the (u, v) derivatives of a position offset on a surface.
 
 A camera sample has two neighbour rays, one sample spacing to the right and one down. Where the main ray hits
 a surface at p with normal n, the neighbours are intersected with the tangent plane,
 p' = o + d'·((p − o)·n / (d'·n)), giving ∂p/∂x = p'_x − p and ∂p/∂y = p'_y − p. With the surface's
 parametrisation ∂p/∂u, ∂p/∂v, the texture-space derivatives are the least-squares solution of
 ∂p/∂x = ∂p/∂u·∂u/∂x + ∂p/∂v·∂v/∂x (normal equations, 2×2), likewise for y.
+
+References
+----------
+-   Igehy, H. (1999). Tracing ray differentials. SIGGRAPH '99, 179–186.
+-   Pharr, M., Jakob, W., & Humphreys, G. (2016). Physically Based Rendering: From Theory to Implementation
+    (3rd ed.). Morgan Kaufmann.
 """
 from __future__ import annotations
 
 from natscene.composite.vectors import dot
+
+__all__ = ["tangent_plane_offsets", "uv_derivatives", "texture_derivative"]
 
 
 def tangent_plane_offsets(o, p, n, d_offset):

@@ -1,8 +1,15 @@
-"""Full-spectral reference mode (Dong 2007 §2.5: the comparison with Sun et al.'s full-spectrum framework
+"""
+Full-spectral reference mode
+============================
+
+Defines the full-spectral reference mode (Dong 2007 §2.5: the comparison with Sun et al.'s full-spectrum framework
 [SFDC01], "which emphasizes real spectra as input, computes full spectra light-object interactions and
 generates spectral images convertible to RGB"): the same set and the same rays as the hybrid renderer, but
 every material, light and pixel is a spectrum on the wavelength grid (default 81 bands) and every
 light-material interaction is a per-band product, on every sample and every bounce.
+
+-   :func:`render_full_spectral`: the set rendered with every colour a spectrum.
+-   :class:`SpectralInputs`: the spectra of the set's RGB inputs (the spectral renderer's preprocessing).
 
 Preprocessing and rendering (the preprocessing timed with the render): every RGB input becomes spectra with the
 hybrid's published upsampling (:mod:`natscene.spectral.upsampling`), each by the cheaper of two equivalent
@@ -19,6 +26,14 @@ With the Mallett-Yuksel upsampling (linear, exact round trip under D65) the two 
 and a neutral sky; under coloured light they differ on RGB materials, because a product of two upsampled
 spectra does not integrate to the product of the two RGB triples (Dong's hybrid, which shades RGB materials
 in RGB, has the same property).
+
+References
+----------
+-   Dong, W. (2007). Rendering Algorithms for Natural Scenes. PhD thesis, Université Henri Poincaré - Nancy I.
+-   Mallett, I., & Yuksel, C. (2019). Spectral primary decomposition for rendering with sRGB reflectance.
+    Eurographics Symposium on Rendering 2019.
+-   Sun, Y., Fracchia, F. D., Drew, M. S., & Calvert, T. W. (2001). A spectrally based framework for realistic
+    image synthesis. The Visual Computer, 17(7), 429–444.
 """
 from __future__ import annotations
 
@@ -30,6 +45,8 @@ from natscene.composite.renderer import SetRenderer
 from natscene.composite.set_geometry import KIND_FILM, KIND_GROUND, KIND_SKY, KIND_SURFACE, Hits, MirrorHits
 from natscene.spectral.grid import spectrum_to_rgb_matrix
 from natscene.spectral.upsampling import rgb_to_radiance, rgb_to_reflectance
+
+__all__ = ["SpectralInputs", "render_full_spectral"]
 
 
 class SpectralInputs:

@@ -1,5 +1,11 @@
-"""Grass blades in the near field: the ground texture (the ω-tiled grass) stands up as geometry where the
+"""
+Grass blades of the set
+=======================
+
+Defines the grass blades in the near field: the ground texture (the ω-tiled grass) stands up as geometry where the
 camera can resolve single blades, and lies flat beyond.
+
+-   :func:`grass_blades`: a mesh of grass blades over the wedge of ground.
 
 Each blade is a tapered, bent strip: root r on the ground, height h, lean direction c (horizontal unit) and
 bend b, centre line P(s) = r + h·(s·ŷ + b·s²·c), s ∈ [0, 1], width w(s) = w₀·(1 − s)^0.7 across the horizontal
@@ -16,6 +22,8 @@ import numpy as np
 
 from natscene.composite.placement import in_wedge, wedge_points
 from natscene.composite.mesh import TriMesh
+
+__all__ = ["grass_blades"]
 
 
 def grass_blades(rng: np.random.Generator, area: dict, density: float, height=(0.04, 0.11), width: float = 0.004,

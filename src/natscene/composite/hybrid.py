@@ -1,10 +1,21 @@
-"""The hybrid intermediate image of Dong 2007 §2.3.2 and its colour transformation (§2.4).
+"""
+Hybrid intermediate image
+=========================
+
+Defines the hybrid intermediate image of Dong (2007, §2.3.2) and its colour transformation (§2.4):
+
+-   :class:`HybridImage`: the RGB part, the spectral part and the coverage of every pixel.
+-   :func:`final_rgb`: the §2.4 colour transformation.
 
 Each pixel holds an RGB part (linear sRGB, what RGB materials lit by RGB-converted lights produced), a
 spectral part S(λ) (what spectral materials produced, radiance on the wavelength grid) and a coverage A.
 On disk: one EXR with channels ``R, G, B, S380 ... S780, A``. The displayable colour is
 
     final = RGB + M_XYZ->sRGB · κ ∫ S(λ) x̄(λ) dλ        (Color_inter = Color_RGB + Color_spectrum, §2.3.2)
+
+References
+----------
+-   Dong, W. (2007). Rendering Algorithms for Natural Scenes. PhD thesis, Université Henri Poincaré - Nancy I.
 """
 from __future__ import annotations
 
@@ -13,6 +24,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from natscene.spectral.grid import DEFAULT_GRID, WavelengthGrid, spectrum_to_rgb_matrix
+
+__all__ = ["HybridImage", "final_rgb"]
 
 
 @dataclass

@@ -1,4 +1,15 @@
-"""Turn a validated ``composite.<name>`` config entry into a :class:`natscene.composite.set_spec.SetSpec`.
+"""
+Inputs of the set
+=================
+
+Defines how a validated ``composite.<name>`` config entry becomes a :class:`natscene.composite.set_spec.SetSpec`:
+
+-   :func:`build_set`: the set of one frame of a composite.
+-   :func:`input_files`, :func:`image_files`, :func:`shot_files`, :func:`pattern_product`: the files a frame
+    reads.
+-   :func:`load_image`, :func:`cutout_texture`: image sources and cut-out textures.
+-   :func:`frame_state`, :func:`reference_distance`, :func:`sun_c_in_from_product`: what the shot and the sky
+    products give the set.
 
 With ``shot``: frame k of the composite is frame k of that shot, so the set is seen by the frame's camera
 (``shots/<shot>/params/<frame>.yaml``), at the shot's ``resolution``, in front of the frame's cloud plate
@@ -11,6 +22,10 @@ Image sources: results products, bundled files, flat colours, gradients, checker
 pattern maps ``patterns/<pattern>/color.exr`` (alpha = petal outline); leaf textures are season stages warped
 onto the maple outline (:mod:`natscene.composite.maple`). Cut-out textures have their colours extended past
 the outline before their mip levels are built, so that filtered edges keep the petal's colour.
+
+References
+----------
+-   Dong, W. (2007). Rendering Algorithms for Natural Scenes. PhD thesis, Université Henri Poincaré - Nancy I.
 """
 from __future__ import annotations
 
@@ -29,6 +44,9 @@ from natscene.errors import InputError
 from natscene.geometry import Camera, sun_direction
 from natscene.io import read_photo, read_yaml
 from natscene.spectral.grid import WavelengthGrid
+
+__all__ = ["image_files", "load_image", "pattern_product", "shot_files", "input_files", "cutout_texture",
+           "frame_state", "reference_distance", "build_set", "sun_c_in_from_product"]
 
 
 def image_files(source: dict, frame: int, results: str, root: str) -> list[str]:
@@ -155,7 +173,7 @@ def build_set(entry: dict, frame: int, results: str, root: str, shot_cfg: dict |
         if sun_cfg.get("intensity") is None:
             sun_cfg["intensity"] = st["L_in"]
         sun_dir = sun_direction(sun_cfg["azimuth"], sun_cfg["elevation"])
-        sky = shot_sky(shot_cfg.get("sky", {}), sun_dir)
+        sky = shot_sky(shot_cfg.get("sky"), sun_dir)
         atmosphere = Atmosphere(st["kappa_a"], reference_distance(c["position"], f["volume"]))
     else:
         W, H = entry["resolution"]

@@ -1,5 +1,16 @@
-"""Maple leaves for the set: a parametric palmate outline, the season colour map warped onto it, and the
-curled leaf lying on the ground.
+"""
+Maple leaves of the set
+=======================
+
+Defines the maple leaves for the set: a parametric palmate outline, the season colour map warped onto it, and the
+curled leaf lying on the ground:
+
+-   :class:`MapleOutline`: the outline's lobes and teeth.
+-   :func:`warp_season_map`: a season map warped onto the outline; :func:`season_margin`, :func:`extend_colours`:
+    its own margin and its colours continued past it (:data:`SEASON_ROOT`, :data:`SEASON_VEINS_DEG`,
+    :data:`SEASON_VEIN_LENGTH`: where its veins are).
+-   :func:`leaf_mesh`: a fallen leaf; :func:`leaf_cells`, :func:`drop_transparent_cells`, :func:`cell_keep`: the
+    faces that hold any of the texture's alpha.
 
 Outline (Acer saccharum / platanoides, five lobes): in polar coordinates (r, φ) around the petiole, φ = 0
 toward the leaf tip, the margin is the smooth maximum (log-sum-exp, sharpness ``k``) of a small palm disc
@@ -16,6 +27,10 @@ from a root at (0.5, 0.78) of the image at ±38.4° and ±76.8° (:func:`natscen
 The map is warped in polar coordinates around that root so that its veins run to the new lobe tips
 (piecewise-linear in φ between lobe and vein angles, radius scaled by vein length / lobe length), after its
 colours were extended past its own outline by nearest-pixel fill; the outline's antialiased mask is the alpha.
+
+References
+----------
+-   Dong, W. (2007). Rendering Algorithms for Natural Scenes. PhD thesis, Université Henri Poincaré - Nancy I.
 """
 from __future__ import annotations
 
@@ -26,6 +41,9 @@ import numpy as np
 from scipy import ndimage
 
 from natscene.composite.mesh import TriMesh, grid_surface
+
+__all__ = ["SEASON_ROOT", "SEASON_VEINS_DEG", "SEASON_VEIN_LENGTH", "MapleOutline", "extend_colours",
+           "warp_season_map", "season_margin", "leaf_mesh", "leaf_cells", "drop_transparent_cells", "cell_keep"]
 
 #: root (petiole attachment) of the season map, (x, y) normalised, y down; its vein angles (deg) and length
 SEASON_ROOT = (0.5, 0.78)

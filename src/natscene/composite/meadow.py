@@ -1,5 +1,12 @@
-"""The meadow: seeded placement of flowers, fallen maple leaves and beetles on the ground in front of the
-camera, turned into the set's shapes and materials.
+"""
+Meadow of the set
+=================
+
+Defines the meadow: seeded placement of flowers, fallen maple leaves and beetles on the ground in front of the
+camera, turned into the set's shapes and materials:
+
+-   :func:`build_meadow`: the surfaces, films and shapes of the meadow (:data:`BEETLES`, :data:`STEM_RGB`,
+    :data:`CHITIN_RGB`).
 
 Placement is in the set's frame (metres, the set origin on the ground below the camera of the first frame,
 the view toward +z), inside the wedge ``near <= r <= far``, |azimuth| <= ``half_angle``. Flowers grow in
@@ -23,6 +30,8 @@ from natscene.composite.mesh import merge, rotation_axis, rotation_y
 from natscene.composite.placement import patch_points, wedge_points
 from natscene.composite.set_spec import Shape, Surface
 from natscene.composite.texture import MipTexture
+
+__all__ = ["STEM_RGB", "CHITIN_RGB", "BEETLES", "build_meadow"]
 
 STEM_RGB = (0.07, 0.16, 0.03)
 CHITIN_RGB = (0.02, 0.015, 0.01)

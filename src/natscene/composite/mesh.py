@@ -1,6 +1,16 @@
-"""Triangle meshes of the set (petals, leaves, stems, beetle bodies): a small container and the builders the
-object modules share: parametric grid surfaces, swept tubes, super-ellipsoids, area-weighted vertex normals
-and rigid transforms. Positions are metres in the set's frame (y up, ground y = 0); texture coordinates are
+"""
+Triangle meshes of the set
+==========================
+
+Defines the triangle meshes of the set (petals, leaves, stems, beetle bodies): a small container and the builders
+the object modules share:
+
+-   :class:`TriMesh`: vertices, faces, texture coordinates and normals; :func:`merge`: many meshes as one.
+-   :func:`grid_surface`, :func:`grid_faces`: parametric grid surfaces.
+-   :func:`tube`, :func:`frame_along`: swept tubes; :func:`superellipsoid`: super-ellipsoids.
+-   :func:`vertex_normals`: area-weighted vertex normals.
+-   :func:`rotation_y`, :func:`rotation_axis`: rigid rotations.
+ Positions are metres in the set's frame (y up, ground y = 0); texture coordinates are
 (u, v) in [0, 1]² with v up, the convention of :mod:`natscene.composite.texture`.
 """
 from __future__ import annotations
@@ -8,6 +18,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+
+__all__ = ["TriMesh", "merge", "vertex_normals", "grid_faces", "grid_surface", "frame_along", "tube",
+           "superellipsoid", "rotation_y", "rotation_axis"]
 
 
 @dataclass

@@ -1,9 +1,19 @@
-"""Where things go on the meadow: seeded points in the wedge of ground in front of the set's origin
+"""
+Placement on the meadow
+=======================
+
+Defines where things go on the meadow: seeded points in the wedge of ground in front of the set's origin
 (metres, the view toward +z): ``near <= r <= far``, |azimuth from +z| <= ``half_angle``; uniform over its area,
-or in Gaussian patches (flowers grow in patches)."""
+or in Gaussian patches (flowers grow in patches).
+
+-   :func:`wedge_points`: points uniform over the wedge's area; :func:`in_wedge`: whether points lie in it.
+-   :func:`patch_points`: points in Gaussian patches.
+"""
 from __future__ import annotations
 
 import numpy as np
+
+__all__ = ["wedge_points", "in_wedge", "patch_points"]
 
 
 def wedge_points(rng: np.random.Generator, n: int, area: dict) -> np.ndarray:

@@ -1,5 +1,13 @@
-"""The hybrid rendering of the set (Dong 2007 Ch. 2, §2.3-2.5, Fig. 2.3): shading of the rays of
-:mod:`natscene.composite.set_geometry` (the same for every colour mode).
+"""
+Hybrid rendering of the set
+===========================
+
+Defines the hybrid rendering of the set (Dong 2007, Ch. 2, §2.3-2.5, Fig. 2.3): shading of the rays of
+:mod:`natscene.composite.set_geometry` (the same for every colour mode):
+
+-   :class:`SetRenderer`: traces the set's rays once and shades them in a colour mode.
+-   :func:`spectral_coverage`: the fraction of pixels with a non-zero spectral part.
+-   :data:`HAZE_MIN`: the in-scattered fraction below which the aerial perspective is not evaluated.
 
 Shading of RGB materials (ground, petals, leaves, stems; Dong: "RGB materials lit in RGB by the RGB value of
 every light", the spectral sun converted once, §2.3.3): L = ρ/π · (E_sun·max(n·l, 0)·V + E_sky(n))
@@ -17,6 +25,13 @@ away; the grey factor differs from per-channel e^{−κ t} by < 1e−4 there). M
 RGB instead (the film reflectance tables integrated to RGB under D65): the baseline of the cost benchmark.
 
 Rays that leave the set show the background plate (the shot's cloud frame, rendered from the same camera).
+
+References
+----------
+-   Dobashi, Y., Iwasaki, W., Ono, A., Yamamoto, T., Yue, Y., & Nishita, T. (2012). An inverse problem approach
+    for automatically adjusting the parameters for rendering clouds using photographs. ACM Transactions on
+    Graphics, 31(6).
+-   Dong, W. (2007). Rendering Algorithms for Natural Scenes. PhD thesis, Université Henri Poincaré - Nancy I.
 """
 from __future__ import annotations
 
@@ -33,6 +48,8 @@ from natscene.spectral.grid import reflectance_to_rgb
 from natscene.spectral.illuminants import d65
 from natscene.spectral.thin_film import FilmTable, film_table
 from natscene.spectral.upsampling import rgb_to_radiance
+
+__all__ = ["HAZE_MIN", "SetRenderer", "spectral_coverage"]
 
 HAZE_MIN = 1e-4  # in-scattered fraction below which the aerial perspective is not evaluated
 

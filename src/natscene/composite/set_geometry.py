@@ -1,6 +1,15 @@
-"""The shared geometry of the set's rendering (Dong 2007 Ch. 2): the same rays for every colour mode, so that
+"""
+Shared geometry of the set's rendering
+======================================
+
+Defines the shared geometry of the set's rendering (Dong 2007 Ch. 2): the same rays for every colour mode, so that
 the modes (:mod:`natscene.composite.renderer`: hybrid and RGB; :mod:`natscene.composite.full_spectral`) differ only
 in how colour is carried.
+
+-   :class:`SetGeometry`: traces the set's rays; their geometry in :class:`Hits` and :class:`MirrorHits`
+    (:data:`KIND_SKY`, :data:`KIND_GROUND`, :data:`KIND_SURFACE`, :data:`KIND_FILM`: what a ray hit).
+-   :func:`stratified_offsets`: the sub-pixel offsets of the camera rays; :data:`EPS`: the offset of secondary
+    ray origins.
 
 Camera rays through fixed stratified sub-pixel positions, each with two neighbour rays one sample spacing away
 (texture footprints, :mod:`natscene.composite.footprint`); closest hits with the meshes (Mitsuba,
@@ -12,6 +21,10 @@ shadow rays need it, every shading mode uses it.
 A block of rays runs as Dr.Jit kernels from the camera rays to the sun terms (float64 for directions, hit
 points and footprints, float32 for the Mitsuba queries, in the order of the formulas without fused
 multiply-adds); its results are copied to numpy once, for the shading.
+
+References
+----------
+-   Dong, W. (2007). Rendering Algorithms for Natural Scenes. PhD thesis, Université Henri Poincaré - Nancy I.
 """
 from __future__ import annotations
 
@@ -26,6 +39,9 @@ from natscene.composite.texture import MipTexture
 from natscene.composite.tracer import SetTracer, ground_hits
 from natscene.composite.vectors import array3f64, dot
 from natscene.spectral.grid import spectrum_to_rgb
+
+__all__ = ["KIND_SKY", "KIND_GROUND", "KIND_SURFACE", "KIND_FILM", "EPS", "stratified_offsets", "Hits", "MirrorHits",
+           "SetGeometry"]
 
 KIND_SKY, KIND_GROUND, KIND_SURFACE, KIND_FILM = -1, 0, 1, 2
 EPS = 2e-5  # metres: offset of secondary ray origins

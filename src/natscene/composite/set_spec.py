@@ -1,13 +1,29 @@
-"""What the final shot's set holds (Dong 2007 Ch. 2 set-up): camera, background plate, sky, sun, ground,
+"""
+Specification of the set
+========================
+
+Defines what the final shot's set holds (Dong 2007 Ch. 2 set-up): camera, background plate, sky, sun, ground,
 RGB surfaces (textured petals and leaves with cut-out alpha, plain stems), thin-film objects (the beetles'
 shells) and the air between them, all in metres in the set's frame (y up, ground y = 0; the set's origin is
 a world point near the camera, so that float32 geometry keeps millimetres while the world's cloud is
 kilometres away).
 
+-   :class:`SetSpec`: the set: camera, plate, ground, surfaces, films, shapes, sky, sun and atmosphere.
+-   :class:`Surface`, :class:`Film`, :class:`Shape`, :class:`Ground`, :class:`Atmosphere`: its parts;
+    :func:`gradient_sky_default`: its default sky.
+-   :func:`sun_spectrum_from_rgb`: the spectral sun of an RGB colour and intensity.
+
 The sun's spectrum: ``"d65"`` (Dong §2.5) scaled to luminance L_in·Y(c_in), or ``"matched"`` (a daylight SPD
 matched to c_in, :func:`natscene.spectral.illuminants.sun_spd`) times L_in. In the cloud model the single
 scattering radiance is c_in·L_in·β·p·S_sun (Dobashi Eq. 5), i.e. the clouds are lit by a sun of irradiance
 c_in·L_in; the set takes the same sun.
+
+References
+----------
+-   Dobashi, Y., Iwasaki, W., Ono, A., Yamamoto, T., Yue, Y., & Nishita, T. (2012). An inverse problem approach
+    for automatically adjusting the parameters for rendering clouds using photographs. ACM Transactions on
+    Graphics, 31(6).
+-   Dong, W. (2007). Rendering Algorithms for Natural Scenes. PhD thesis, Université Henri Poincaré - Nancy I.
 """
 from __future__ import annotations
 
@@ -21,6 +37,9 @@ from natscene.composite.texture import MipTexture
 from natscene.geometry import Camera, sun_direction
 from natscene.spectral.grid import DEFAULT_GRID, WavelengthGrid
 from natscene.spectral.illuminants import d65, sun_spd
+
+__all__ = ["Surface", "Film", "Shape", "Ground", "Atmosphere", "gradient_sky_default", "SetSpec",
+           "sun_spectrum_from_rgb"]
 
 
 @dataclass

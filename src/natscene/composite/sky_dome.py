@@ -1,5 +1,15 @@
-"""The sky dome that lights the set: the frame's sky radiance toward any direction, and the irradiance it
-gives a surface of any orientation.
+"""
+Sky dome of the set
+===================
+
+Defines the sky dome that lights the set: the frame's sky radiance toward any direction, and the irradiance it
+gives a surface of any orientation:
+
+-   :class:`SkyDome`: the sky radiance above the horizon, the ground's bounce below it, and the SH9 irradiance of
+    both.
+-   :func:`shot_sky`, :func:`gradient_sky`: the radiance function of a shot's sky or of a gradient.
+-   :func:`sh9`, :func:`sphere_quadrature`: the nine spherical harmonics and the quadrature over the sphere.
+-   :func:`lookup_table`: a bilinear lookup of a latitude-longitude table.
 
 Radiance. With a shot, the sky is the one behind the clouds of the frame
 (:func:`natscene.sky.daylight.shot_sky_radiance`: Preetham et al. 1999 following the frame's sun, or the shot's
@@ -11,12 +21,21 @@ irradiance over π, L_g = ρ̄/π · (E_sun·sin(elevation) + E_sky(up)) (one bo
 Irradiance (Ramamoorthi & Hanrahan 2001, "An efficient representation for irradiance environment maps"):
 the radiance is projected on the nine real spherical harmonics of order ≤ 2, L_lm = ∫ L(ω) Y_lm(ω) dω
 (a 64×128 latitude-longitude quadrature), and E(n) = Σ Â_l L_lm Y_lm(n) with Â₀ = π, Â₁ = 2π/3, Â₂ = π/4.
+
+References
+----------
+-   Preetham, A. J., Shirley, P., & Smits, B. (1999). A practical analytic model for daylight. SIGGRAPH '99,
+    91–100.
+-   Ramamoorthi, R., & Hanrahan, P. (2001). An efficient representation for irradiance environment maps.
+    SIGGRAPH '01, 497–500.
 """
 from __future__ import annotations
 
 from typing import Callable
 
 import numpy as np
+
+__all__ = ["sh9", "sphere_quadrature", "gradient_sky", "shot_sky", "SkyDome", "lookup_table"]
 
 _A_HAT = np.array([np.pi] + [2 * np.pi / 3] * 3 + [np.pi / 4] * 5)
 
@@ -49,14 +68,15 @@ def gradient_sky(zenith, horizon) -> Callable[[np.ndarray], np.ndarray]:
     return radiance
 
 
-def shot_sky(settings: dict, sun_dir) -> Callable[[np.ndarray], np.ndarray]:
+def shot_sky(settings: dict | None, sun_dir) -> Callable[[np.ndarray], np.ndarray]:
     """Radiance function of a shot's sky (a validated ``shots.<name>.sky``) for the frame's sun: the sky the
     frame's clouds were rendered in front of (:func:`natscene.sky.daylight.shot_sky_radiance`)."""
-    from natscene.sky.daylight import shot_sky_radiance
-    if settings.get("model", "preetham") not in ("preetham", "constant"):
-        raise ValueError(f"unknown sky model {settings.get('model')!r}")
+    from natscene.sky.daylight import shot_sky_radiance, skylight
+    sky = skylight(settings)
+    if sky.model not in ("preetham", "constant"):
+        raise ValueError(f"unknown sky model {sky.model!r}")
     s = np.asarray(sun_dir, np.float64)
-    return lambda dirs: shot_sky_radiance(settings, np.asarray(dirs, np.float64), s)
+    return lambda dirs: shot_sky_radiance(sky, np.asarray(dirs, np.float64), s)
 
 
 class SkyDome:

@@ -1,4 +1,11 @@
-"""Filtered texture lookup for the set: a mip-map pyramid and anisotropic probes along the pixel footprint.
+"""
+Filtered texture lookup
+=======================
+
+Defines the filtered texture lookup for the set: a mip-map pyramid and anisotropic probes along the pixel
+footprint:
+
+-   :class:`MipTexture`: a texture with its mip pyramid and the filtered lookup (:data:`SPAN`).
 
 A texture seen at a grazing angle (the ground toward the horizon) covers many texels per pixel along one
 direction only; a point sample there aliases (moiré on a regular texture, sparkle on grass). The lookup
@@ -13,21 +20,27 @@ sample spacing (:mod:`natscene.composite.footprint`):
   texture mapping"; the scheme of hardware anisotropic filtering): n = 2^⌈log₂(σ₁/σ₂)⌉ ≤ ``max_aniso``
   trilinear probes, evenly spaced along e over a length ``SPAN``·σ₁, each at the mip level
   λ = log₂ max(σ₁/n, σ₂), averaged with equal weights; λ < 0 (magnification) is a bilinear lookup of level 0.
-  SPAN = 1.5 is the width OpenImageIO's anisotropic filter covers (measured against its TextureSystem:
-  mean difference about 1 % of the texture's range, against 5 % for SPAN = 1; isotropic footprints agree
-  with it to float precision: the same box pyramid and trilinear level choice).
+  SPAN = 1.5 is the width OpenImageIO's anisotropic filter covers (isotropic footprints agree with its
+  TextureSystem: the same box pyramid and trilinear level choice; the comparison: docs/stages/composite.md).
 
 Wrap-around (``wrap=True``, the tiled ground) or clamp-to-edge (petals, leaves). (u, v) in [0, 1]² with v up
 (row 0 is v = 1). OpenImageIO's ``TextureSystem`` does the same filtering per point; its Python binding
 takes one point per call, so the renderer uses this vectorised lookup and the tests compare the two. The
 footprint analysis is numpy; the probes (positions, wrap, texel gathers, blends, their mean) run as one Dr.Jit
 kernel per lookup, with a loop over each sample's own probe count, in the arithmetic order of the formulas
-above: on the LLVM backend the same float32 results as numpy evaluating them, about 7× faster on 2 cores (the
-CUDA backend fuses multiply-adds: results within a few float32 ulps of those).
+above: on the LLVM backend the same float32 results as numpy evaluating them (the CUDA backend fuses
+multiply-adds: results within a few float32 ulps of those).
+
+References
+----------
+-   McCormack, J., Perry, R., Farkas, K. I., & Jouppi, N. P. (1999). Feline: fast elliptical lines for
+    anisotropic texture mapping. SIGGRAPH '99, 243–250.
 """
 from __future__ import annotations
 
 import numpy as np
+
+__all__ = ["SPAN", "MipTexture"]
 
 #: length of the line of probes, in units of the footprint's major radius σ₁ (see the module docstring)
 SPAN = 1.5

@@ -1,5 +1,12 @@
-"""Ray casting of the set: Mitsuba 3 for the meshes (petals, leaves, stems, beetles), the ground plane y = 0
-analytically.
+"""
+Ray casting of the set
+======================
+
+Defines the ray casting of the set: Mitsuba 3 for the meshes (petals, leaves, stems, beetles), the ground plane
+y = 0 analytically:
+
+-   :class:`SetTracer`: closest hits and occlusion of rays with the set's meshes.
+-   :func:`ground_hits`: the distance along rays to the ground plane.
 
 The meshes go into one Mitsuba scene (RGB variant; meshes built in memory with ``mi.Mesh`` and
 ``mi.traverse``). The queries take and return Dr.Jit arrays (:meth:`SetTracer.intersect_dr`: shape label,
@@ -16,6 +23,8 @@ import numpy as np
 
 from natscene.composite.mesh import TriMesh
 from natscene.composite.vectors import array3f64, dot
+
+__all__ = ["SetTracer", "ground_hits"]
 
 
 class SetTracer:

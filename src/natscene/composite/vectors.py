@@ -1,8 +1,18 @@
-"""Dr.Jit vector helpers of the set's geometry: numpy arrays as Array3f64, and the dot product written out
-(x + y) + z without fused multiply-adds, the order numpy evaluates it in."""
+"""
+Dr.Jit vector helpers
+=====================
+
+Defines the Dr.Jit vector helpers of the set's geometry:
+
+-   :func:`array3f64`: numpy arrays as Array3f64.
+-   :func:`dot`: the dot product written out (x + y) + z without fused multiply-adds, the order numpy evaluates
+    it in.
+"""
 from __future__ import annotations
 
 import numpy as np
+
+__all__ = ["array3f64", "dot"]
 
 
 def array3f64(a):

@@ -5,3 +5,5 @@ renderers do (albedo and normal of what the pixel sees), computed from the volum
 noise-free. ``oidn``: Intel Open Image Denoise through its Python binding ``pyoidn`` (the ``RT`` filter,
 HDR, with the clean features). ``noise``: the noise figure of a frame (two renders with different seeds).
 """
+
+__all__: list[str] = []  # a map of the package; import the module you need

@@ -1,5 +1,15 @@
-"""Feature images of a cloud for a learned denoiser (Intel Open Image Denoise's ``albedo`` and ``normal``
-inputs), computed from the volume and the frame's camera, without noise.
+"""
+Feature images of a cloud for the denoiser
+==========================================
+
+Defines the feature images of a cloud for a learned denoiser (Intel Open Image Denoise's ``albedo`` and
+``normal`` inputs), computed from the volume and the frame's camera, without noise:
+
+-   :func:`frame_features`: all feature images of one frame (opacity, coverage, albedo, normal).
+-   :func:`view_features`: the opacity, normal and coverage of the cloud seen by a camera.
+-   :func:`albedo_image`: the albedo image.
+-   :func:`density_gradient`, :func:`empty_space_distance`: the volume's density gradient and distance to the
+    nearest non-empty voxel.
 
 OIDN asks for the "approximate colour of the surfaces independent of illumination and viewing angle" (albedo,
 in [0, 1]) and their shading normals (in [-1, 1], anti-aliased by averaging, not renormalised), both with the
@@ -25,6 +35,10 @@ image's filter is a box too). The march uses the trilinear density (cell-centred
 ``gridvolume``) at ``step_voxels`` steps (midpoint rule), skips empty space by the Euclidean distance to the
 nearest non-empty voxel (sphere tracing on :func:`empty_space_distance`) and stops once T < ``t_min``; the
 kernel is compiled with numba, parallel over rays.
+
+References
+----------
+-   Intel Open Image Denoise (OIDN) 2.x documentation, "RT" filter. https://www.openimagedenoise.org/documentation.html
 """
 from __future__ import annotations
 
@@ -32,6 +46,8 @@ import numpy as np
 from numba import njit, prange
 
 from natscene.geometry import ray_box
+
+__all__ = ["density_gradient", "empty_space_distance", "view_features", "albedo_image", "frame_features"]
 
 # A trilinear lookup at p reads the 8 voxel centres within max-norm 1 of p (Euclidean sqrt 3 voxels); the
 # distance map is read at the voxel centre nearest to p (up to sqrt 3 / 2 away): a step of d - SAFETY voxels

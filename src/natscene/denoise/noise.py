@@ -1,4 +1,12 @@
-"""The noise figure of a rendered frame (docs/stages/shots.md, "Noise figure").
+"""
+Noise figure of a rendered frame
+================================
+
+Defines the noise figure of a rendered frame (docs/stages/shots.md, "Noise figure"):
+
+-   :func:`noise_figure`: N of two renders over the cloud pixels.
+-   :func:`cloud_pixels`: the cloud pixels of a frame.
+-   :func:`luminance`: the Rec. 709 luminance of an image.
 
 Render the same frame twice with different random seeds, a and b. Over the cloud pixels (luminance Y, Rec. 709
 weights)
@@ -13,6 +21,8 @@ from __future__ import annotations
 import numpy as np
 
 from natscene.color import LUMA_709
+
+__all__ = ["luminance", "noise_figure", "cloud_pixels"]
 
 
 def luminance(img: np.ndarray) -> np.ndarray:

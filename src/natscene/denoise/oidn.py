@@ -1,5 +1,13 @@
-"""Intel Open Image Denoise (OIDN 2.x) through its Python binding ``pyoidn``: the ``RT`` filter on an HDR
-frame with clean albedo and normal features (:mod:`natscene.denoise.features`).
+"""
+Intel Open Image Denoise
+========================
+
+Defines the denoiser of the frames, Intel Open Image Denoise (OIDN 2.x) through its Python binding ``pyoidn``: the
+``RT`` filter on an HDR frame with clean albedo and normal features (:mod:`natscene.denoise.features`):
+
+-   :func:`denoise_frame`: the denoised frame, changed only where the cloud covers it.
+-   :class:`OIDN`: a committed OIDN CPU device and ``RT`` filter (:data:`QUALITIES`).
+-   :class:`DenoiserUnavailable`: raised when the denoiser cannot be loaded on this machine.
 
 OIDN is a convolutional network trained on path-traced images; fed with noise-free auxiliary images of what
 each pixel sees it keeps the edges and texture those images show and removes the Monte Carlo noise of the
@@ -11,12 +19,18 @@ colour. Settings used here (OIDN's documentation, "RT" filter): ``hdr`` on (line
 The denoiser only changes what the cloud covers: ``out = raw + coverage (oidn(raw) - raw)``, coverage the
 fraction of a pixel's sub-rays that meet the cloud. Elsewhere the frame is the analytic sky, which carries no
 noise, and stays exactly as rendered.
+
+References
+----------
+-   Intel Open Image Denoise (OIDN) 2.x documentation, "RT" filter. https://www.openimagedenoise.org/documentation.html
 """
 from __future__ import annotations
 
 import numpy as np
 
 from natscene.errors import InputError
+
+__all__ = ["QUALITIES", "DenoiserUnavailable", "OIDN", "denoise_frame"]
 
 QUALITIES = ("high", "balanced", "fast")
 

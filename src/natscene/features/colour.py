@@ -1,4 +1,15 @@
-"""The colour feature (Dong 2007, §6.5): colour regions of a texture, their statistics, and colour transfer.
+"""
+Colour feature of a texture
+===========================
+
+Defines the colour feature of Dong (2007, §6.5): colour regions of a texture, their statistics, and colour
+transfer:
+
+-   :func:`segment`: the colour regions of an image by mean shift.
+-   :func:`region_stats`: each region's size, mean and standard deviation in l-alpha-beta.
+-   :func:`transfer`, :func:`transfer_to_largest`, :func:`recolour_regions`: Reinhard's colour transfer, to the
+    largest region, or from saved statistics.
+-   :func:`rgb_to_lab_rs`, :func:`lab_rs_to_rgb`: linear RGB to Reinhard's l-alpha-beta and back.
 
 (1) the texture is segmented by colour with mean shift (Comaniciu & Meer 2002: OpenCV's
 ``pyrMeanShiftFiltering``, then the connected regions of equal filtered colour, small ones merged into their
@@ -6,6 +17,14 @@ largest neighbour); (2) a user may edit the label image; (3) optionally every re
 largest region's (Reinhard, Ashikhmin, Gooch & Shirley, *Color transfer between images*, 2001: per-axis mean and
 standard deviation in l-alpha-beta); (4) each region's mean and standard deviation in l-alpha-beta are saved with
 the colour map, so that a synthesised texture can be given back the regions' colours (Fig. 6.15(d)).
+
+References
+----------
+-   Comaniciu, D., & Meer, P. (2002). Mean shift: A robust approach toward feature space analysis. IEEE
+    Transactions on Pattern Analysis and Machine Intelligence, 24(5), 603–619.
+-   Dong, W. (2007). Rendering Algorithms for Natural Scenes. PhD thesis, Université Henri Poincaré - Nancy I.
+-   Reinhard, E., Ashikhmin, M., Gooch, B., & Shirley, P. (2001). Color transfer between images. IEEE Computer
+    Graphics and Applications, 21(5), 34–41.
 """
 from __future__ import annotations
 

@@ -1,4 +1,11 @@
-"""Image completion of a textured region by feature-aware synthesis (Dong 2007, §6.7, Fig. 6.16).
+"""
+Image completion by feature-aware synthesis
+===========================================
+
+Defines the image completion of a textured region by feature-aware synthesis (Dong 2007, §6.7, Fig. 6.16):
+
+-   :func:`complete`: fill a hole of an image by texture optimisation from the rest of the image.
+-   :func:`inpaint_baseline`: the exemplar-free inpainting the chapter compares with.
 
 The scale feature is recovered from the photo around the hole (a scale map of the whole image: from the slant and
 tilt of the textured plane, Eq. 6.2, or from a feature mask, Eq. 6.1, where the hole's own pixels do not count),
@@ -6,6 +13,12 @@ and the hole is synthesised by texture optimisation with the control energy of E
 the modified E- and M-steps of :mod:`natscene.features.optimisation`), the example being the rest of the image:
 only neighbourhoods that lie wholly in the known part are candidates, and the known pixels stay as they are.
 :func:`inpaint_baseline` is the exemplar-free inpainting the chapter compares with (OpenCV's Telea method).
+
+References
+----------
+-   Dong, W. (2007). Rendering Algorithms for Natural Scenes. PhD thesis, Université Henri Poincaré - Nancy I.
+-   Telea, A. (2004). An image inpainting technique based on the fast marching method. Journal of Graphics
+    Tools, 9(1), 23–34.
 """
 from __future__ import annotations
 
@@ -19,7 +32,7 @@ __all__ = ["complete", "inpaint_baseline"]
 
 
 def complete(image: np.ndarray, hole: np.ndarray, scale_features: np.ndarray | None,
-             settings: OptimisationSettings = OptimisationSettings(), log=None) -> Result:
+             settings: OptimisationSettings | None = None, log=None) -> Result:
     """Fill ``hole`` (H, W) bool of ``image`` (H, W, C) in [0, 1]; ``scale_features`` (H, W) or (H, W, k): the
     feature maps over the whole image (None: plain texture optimisation, lambda's term empty)."""
     img = np.asarray(image, np.float32)

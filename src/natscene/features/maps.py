@@ -1,9 +1,20 @@
-"""The feature maps of one ``textures.<name>`` entry (Dong 2007, §6.3-6.6): the example's, from its settings, and
-the output's, resampled from the example's (§6.6.1) or given by the user (§6.6.2).
+"""
+Feature maps of a texture entry
+===============================
+
+Defines the feature maps of one ``textures.<name>`` entry (Dong 2007, §6.3-6.6): the example's, from its settings,
+and the output's, resampled from the example's (§6.6.1) or given by the user (§6.6.2):
+
+-   :func:`example_scale`, :func:`target_scale`: the example's and the output's scale maps.
+-   :func:`resample_labels`: a label map stretched to another size.
 
 Feature maps are carried in the grey units the thesis draws them in, so that Eq. 6.3 compares them with pixel
 values in [0, 1]: scale as 0.5 + 0.5 log2(S) (:func:`natscene.features.scale.grey_from_scale`), types as t / b,
 colour regions as r / (k - 1).
+
+References
+----------
+-   Dong, W. (2007). Rendering Algorithms for Natural Scenes. PhD thesis, Université Henri Poincaré - Nancy I.
 """
 from __future__ import annotations
 

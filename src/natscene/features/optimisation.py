@@ -55,17 +55,23 @@ __all__ = ["OptimisationSettings", "Result", "synthesise", "neighbourhood_energy
 
 @dataclass(frozen=True)
 class OptimisationSettings:
-    """Texture optimisation with the control energy of Eq. 6.3 (``feature_synthesis.optimisation``)."""
+    """Texture optimisation with the control energy of Eq. 6.3 (config ``textures.<name>.optimisation``, and
+    ``type_mode`` of ``textures.<name>.types.mode``; no defaults here: workflow/schemas/textures.schema.yaml's are
+    the only ones, :func:`natscene.features.entry.optimisation_settings`)."""
 
-    lam: float = 0.5                       # lambda of Eq. 6.3
-    levels: int = 3                        # pyramid levels (each half the size of the next)
-    sizes: tuple = (32, 16, 8)             # neighbourhood sizes at the finest level, large to small
-    iterations: int = 4                    # EM iterations per (level, size)
-    r: float = 0.8                         # Kwatra's robust exponent of E_t
-    type_mode: str = "soft"                # soft | tight
-    pca_dims: int = 64                     # neighbourhood vectors reduced to this many dimensions for the search
-    example_step: int = 1                  # example neighbourhoods taken every this many pixels (at least)
-    seed: int = 0
+    lam: float                             # lambda of Eq. 6.3
+    levels: int                            # pyramid levels (each half the size of the next)
+    sizes: tuple                           # neighbourhood sizes at the finest level, large to small
+    iterations: int                        # EM iterations per (level, size)
+    r: float                               # Kwatra's robust exponent of E_t
+    type_mode: str                         # soft | tight
+    pca_dims: int                          # neighbourhood vectors reduced to this many dimensions for the search
+    example_step: int                      # example neighbourhoods taken every this many pixels (at least)
+    seed: int
+
+    CONFIG_NAMES = {"mode": "type_mode"}            # textures.<name>.types.mode
+    SCHEMA = (("textures.schema.yaml", ("additionalProperties", "optimisation")),
+              ("textures.schema.yaml", ("additionalProperties", "types")))
 
 
 @dataclass
@@ -174,7 +180,7 @@ def _as3(a: np.ndarray) -> np.ndarray:
 
 
 def synthesise(example: np.ndarray, size: tuple, example_features: np.ndarray | None = None,
-               target_features: np.ndarray | None = None, settings: OptimisationSettings = OptimisationSettings(),
+               target_features: np.ndarray | None = None, settings: OptimisationSettings | None = None,
                example_types: np.ndarray | None = None, target_types: np.ndarray | None = None,
                known: np.ndarray | None = None, initial: np.ndarray | None = None, log=None) -> Result:
     """An output of ``size`` (height, width) from ``example`` (H, W, C) in [0, 1].
@@ -183,9 +189,12 @@ def synthesise(example: np.ndarray, size: tuple, example_features: np.ndarray | 
     ``example_types`` / ``target_types``: integer type maps (§6.4) used as ``settings.type_mode`` says; ``known``
     (h, w) boolean with ``initial`` (h, w, C): pixels that stay as given (image completion, §6.7), the rest is
     synthesised; then the example must not overlap them (the caller passes the known region's neighbourhoods).
+    ``settings``: None: the schema's defaults.
     """
     import time
-    s = settings
+
+    from natscene.config import default_settings
+    s = settings if settings is not None else default_settings(OptimisationSettings)
     log = log or (lambda msg: None)
     ex = _as3(np.asarray(example, np.float32))
     H, W = int(size[0]), int(size[1])

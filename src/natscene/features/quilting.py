@@ -52,16 +52,22 @@ __all__ = ["QuiltingSettings", "cells", "quilt"]
 
 @dataclass(frozen=True)
 class QuiltingSettings:
-    """Hierarchical quilting (config ``textures.<name>.quilting``)."""
+    """Hierarchical quilting (config ``textures.<name>.quilting``, and ``type_mode`` of
+    ``textures.<name>.types.mode``; no defaults here: workflow/schemas/textures.schema.yaml's are the only ones,
+    :func:`natscene.features.entry.quilting_settings`)."""
 
-    alpha: float = 0.5            # weight of the overlap error; 1 - alpha weighs the feature error
-    cell: int = 32                # the top-level cells: the largest patch
-    min_cell: int = 8             # cells are not split below this
-    tolerance: float = 0.05       # largest spread of a target feature channel (grey units) inside one cell
-    overlap: float = 0.25         # the overlap band on each side, as a share of the cell (at least 2 pixels)
-    epsilon: float = 0.1          # blocks within (1 + epsilon) of the best error are candidates
-    type_mode: str = "soft"       # soft | tight
-    seed: int = 0
+    alpha: float                  # weight of the overlap error; 1 - alpha weighs the feature error
+    cell: int                     # the top-level cells: the largest patch
+    min_cell: int                 # cells are not split below this
+    tolerance: float              # largest spread of a target feature channel (grey units) inside one cell
+    overlap: float                # the overlap band on each side, as a share of the cell (at least 2 pixels)
+    epsilon: float                # blocks within (1 + epsilon) of the best error are candidates
+    type_mode: str                # soft | tight
+    seed: int
+
+    CONFIG_NAMES = {"mode": "type_mode"}            # textures.<name>.types.mode
+    SCHEMA = (("textures.schema.yaml", ("additionalProperties", "quilting")),
+              ("textures.schema.yaml", ("additionalProperties", "types")))
 
 
 def cells(target: np.ndarray, settings: QuiltingSettings, types: np.ndarray | None = None) -> list:
@@ -120,13 +126,14 @@ def _seam(old: np.ndarray, new: np.ndarray, filled: np.ndarray, keep_old: np.nda
 
 
 def quilt(example: np.ndarray, size: tuple, example_features: np.ndarray | None = None,
-          target_features: np.ndarray | None = None, settings: QuiltingSettings = QuiltingSettings(),
+          target_features: np.ndarray | None = None, settings: QuiltingSettings | None = None,
           example_types: np.ndarray | None = None, target_types: np.ndarray | None = None, log=None) -> Result:
     """An output of ``size`` (height, width) from ``example`` (H, W, C) in [0, 1] by hierarchical quilting.
 
     The arguments are those of :func:`natscene.features.optimisation.synthesise`; the result's ``energies`` hold
-    one entry (0, cell size, the summed error e of the chosen blocks)."""
-    s = settings
+    one entry (0, cell size, the summed error e of the chosen blocks); ``settings``: None: the schema's defaults."""
+    from natscene.config import default_settings
+    s = settings if settings is not None else default_settings(QuiltingSettings)
     log = log or (lambda msg: None)
     t_start = time.perf_counter()
     ex = np.asarray(example, np.float32)

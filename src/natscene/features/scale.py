@@ -1,9 +1,23 @@
-"""The scale feature (Dong 2007, §6.3): texel scale maps from a feature mask (Eq. 6.1), from slant and tilt
-(Eq. 6.2), and their editing (§6.3.3).
+"""
+Scale feature of a texture
+==========================
+
+Defines the scale feature of Dong (2007, §6.3): texel scale maps from a feature mask (Eq. 6.1), from slant and
+tilt (Eq. 6.2), and their editing (§6.3.3):
+
+-   :func:`scale_from_mask`: Eq. 6.1, the scale map of a feature mask (after Wu & Yu 2004).
+-   :func:`scale_from_angles`: Eq. 6.2, the scale map of a plane seen at a slant and tilt.
+-   :func:`scale_region`, :func:`copy_region`: the editing of §6.3.3.
+-   :func:`grey_from_scale`, :func:`scale_from_grey`, :func:`scale_preview`: scale to the thesis' grey and back.
 
 Scale 1 is the undistorted texel; larger values are magnified texels (a grey of 128 shows 1 in the thesis'
-figures, :func:`scale_preview` here). References: Dong, *Rendering natural scenes*, PhD thesis, 2007, Ch. 6;
-Wu & Yu 2004 (feature masks).
+figures, :func:`scale_preview` here).
+
+References
+----------
+-   Dong, W. (2007). Rendering Algorithms for Natural Scenes. PhD thesis, Université Henri Poincaré - Nancy I.
+-   Wu, Q., & Yu, Y. (2004). Feature matching and deformation for texture synthesis. ACM Transactions on
+    Graphics, 23(3), 364–367.
 """
 from __future__ import annotations
 

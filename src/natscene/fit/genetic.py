@@ -1,4 +1,15 @@
-"""Genetic algorithm for the cloud parameters (Dobashi et al. 2012, §4.2 and §5; Goldberg 1989).
+"""
+Genetic algorithm for the cloud parameters
+==========================================
+
+Defines the simple genetic algorithm of Dobashi et al. (2012, §4.2 and §5) after Goldberg (1989):
+
+-   :func:`run_ga`: minimise O over the parameters; the ranked distinct sets in a :class:`FitResult`.
+-   :class:`Codec`: parameter values to concatenated ``bits``-bit strings and back.
+-   :class:`UnitBox`: the map between parameter values and the unit box (log scale for :data:`LOG_PARAMS`).
+-   :func:`roulette`, :func:`linear_scaling`, :func:`two_point_crossover`, :func:`mutate`: the operators.
+-   :func:`fit_params`: the parameters a transport model fits; :data:`PARAMS`, :data:`DEFAULT_RANGES`.
+-   :class:`Candidate`: one ranked parameter set.
 
 Following Goldberg's simple GA as the paper does: each parameter (L_in, g, extinction, beta, L_amb) is
 quantised to ``bits`` = 32 bits over its range (value = lo + (hi - lo) * k / (2^bits - 1); the extinction in
@@ -13,10 +24,17 @@ best parameters are unchanged for n_suc (20) successive iterations, or after n_m
 
 The paper gives neither crossover nor mutation rate ("we chose these genetic operators experimentally");
 the defaults here, crossover 0.8 and mutation 0.02 per bit (about 3 flipped bits per 160-bit child), with
-linear scaling, gave the lowest and least scattered final O on a synthetic target over 6 seeds (mean 0.040,
-max 0.063 after 100 iterations; without scaling 0.069 / 0.215; with mutation 1/160 and no scaling 0.14 / 0.34). Every evaluated individual is kept
+linear scaling, are those that gave the lowest and least scattered final O on a synthetic target
+(docs/stages/fit.md, "Measured"). Every evaluated individual is kept
 in an archive, from which the top-k *distinct* parameter sets are ranked (two sets are the same when every
 parameter differs by less than ``distinct_tol`` of its range) for the user to choose from (§1, §4).
+
+References
+----------
+-   Dobashi, Y., Iwasaki, W., Ono, A., Yamamoto, T., Yue, Y., & Nishita, T. (2012). An inverse problem approach
+    for automatically adjusting the parameters for rendering clouds using photographs. ACM Transactions on
+    Graphics, 31(6).
+-   Goldberg, D. E. (1989). Genetic Algorithms in Search, Optimization and Machine Learning. Addison-Wesley.
 """
 from __future__ import annotations
 
@@ -24,6 +42,11 @@ from dataclasses import dataclass, field
 from typing import Callable, Sequence
 
 import numpy as np
+
+from natscene.config import complete_section
+
+__all__ = ["PARAMS", "LOG_PARAMS", "DEFAULT_RANGES", "fit_params", "UnitBox", "Candidate", "FitResult", "Codec",
+           "roulette", "linear_scaling", "two_point_crossover", "mutate", "run_ga"]
 
 PARAMS = ("L_in", "g", "extinction", "beta", "L_amb")       # every parameter a transport may fit (the paper's five)
 LOG_PARAMS = frozenset({"extinction"})                      # searched on a log scale (lo > 0)
@@ -35,8 +58,8 @@ def fit_params(transport: str) -> tuple:
     return get(transport).fit_params
 
 
-DEFAULT_RANGES = {"L_in": (0.0, 10.0), "g": (0.0, 1.0), "extinction": (0.002, 0.3), "beta": (0.9999, 1.0),
-                  "L_amb": (0.0, 1.0)}
+#: parameter -> (min, max): the schema's defaults of ``fit.ranges`` (workflow/schemas/fit.schema.yaml)
+DEFAULT_RANGES = {k: tuple(v) for k, v in complete_section({}, "fit.schema.yaml", ("ranges",), "fit.ranges").items()}
 
 
 class UnitBox:

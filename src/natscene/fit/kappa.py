@@ -1,4 +1,11 @@
-"""Linear search for the atmospheric extinction kappa_a(lambda) (Dobashi et al. 2012, §4.2, Eq. 3, Fig. 3).
+"""
+Line search for the atmospheric extinction
+==========================================
+
+Defines the linear search for kappa_a(lambda) of Dobashi et al. (2012, §4.2, Eq. 3, Fig. 3):
+
+-   :func:`kappa_grid`: the sampled kappa_a values.
+-   :class:`KappaSearch`: the Eq. 3 blend and the per-channel search of kappa_a for a whole population.
 
 Eq. 3 blends the cloud intensity with the sky behind it:
 ``L_cg = L_c exp(-kappa_a t_c) + (1 - exp(-kappa_a t_c)) L_sky``. L_c does not depend on kappa_a, so for each
@@ -14,12 +21,20 @@ individual, the 3 x K images of levels are built in one pass and all their histo
 ``np.bincount`` on offset level indices) and, where numba is importable (it ships with the declared
 dependencies prosail and miepython), one fused compiled loop over (individual, channel) in parallel that
 never materialises the 3 x K images. Both perform the same float32 operations and give identical counts.
+
+References
+----------
+-   Dobashi, Y., Iwasaki, W., Ono, A., Yamamoto, T., Yue, Y., & Nishita, T. (2012). An inverse problem approach
+    for automatically adjusting the parameters for rendering clouds using photographs. ACM Transactions on
+    Graphics, 31(6).
 """
 from __future__ import annotations
 
 import numpy as np
 
-from natscene.fit.objective import Levels, channel_distance, histograms, HISTOGRAM_METRICS, METRICS
+from natscene.fit.objective import Levels, channel_distance, histograms, METRICS
+
+__all__ = ["kappa_grid", "KappaSearch"]
 
 
 def kappa_grid(lo: float = 0.0, hi: float = 1.0, step: float = 0.1) -> np.ndarray:
@@ -177,6 +192,3 @@ class KappaSearch:
             return np.einsum("pcn,pcn->pc", d, d).mean(-1) / d.shape[-1]
         h = histograms(self.levels(np.moveaxis(img, -1, 1)), nl)  # (P, 3, n_L)
         return channel_distance(h, self.target_hist[None], self.metric).mean(-1)
-
-
-__all__ = ["kappa_grid", "KappaSearch", "HISTOGRAM_METRICS", "METRICS"]

@@ -1,8 +1,24 @@
-"""One keyframe fit end to end (Dobashi et al. 2012, Fig. 2): photo products + tables -> ranked parameter sets.
+"""
+One keyframe fit end to end
+===========================
+
+Defines the fit of Dobashi et al. (2012, Fig. 2): photo products + tables -> ranked parameter sets.
+
+-   :func:`fit_keyframe`: fit one keyframe with the GA or the §5.1 gradient baseline.
+-   :func:`effective_ranges`: the configured search ranges, checked against the tables.
+-   :func:`extinction_range_problem`, :func:`check_extinction_range`: ``fit.ranges.extinction`` against the
+    precomputed extinction grid.
+-   :func:`optical_depths`: the optical depth through the cloud at an extinction.
 
 Reads nothing and writes nothing: the ``fit`` rule's script loads the inputs and writes what
 :func:`fit_keyframe` returns. The GA (or the §5.1 gradient baseline) runs over FitProblem's O; the top-k
 distinct sets are re-rendered as full images (Eq. 3 over Eq. 4) for the contact sheet.
+
+References
+----------
+-   Dobashi, Y., Iwasaki, W., Ono, A., Yamamoto, T., Yue, Y., & Nishita, T. (2012). An inverse problem approach
+    for automatically adjusting the parameters for rendering clouds using photographs. ACM Transactions on
+    Graphics, 31(6).
 """
 from __future__ import annotations
 
@@ -18,6 +34,9 @@ from natscene.fit.problem import FitProblem
 from natscene.fit.settings import FitSettings, fit_settings
 from natscene.errors import InputError
 from natscene.scatter.transport import get as get_transport
+
+__all__ = ["effective_ranges", "extinction_range_problem", "check_extinction_range", "optical_depths",
+           "fit_keyframe"]
 
 
 def effective_ranges(settings: dict | FitSettings, tables, log=None) -> dict:

@@ -1,4 +1,14 @@
-"""The objective function O of Dobashi et al. 2012, Eq. 2, and the alternatives their §5.1 and §6 tried.
+"""
+Objective function of the fit
+=============================
+
+Defines the objective O of Dobashi et al. (2012, Eq. 2) and the alternatives their §5.1 and §6 tried:
+
+-   :func:`objective`: O between a synthetic image and the photograph over their cloud pixels.
+-   :class:`Levels`: linear values to the n_L intensity levels of an encoding (:data:`ENCODINGS`).
+-   :func:`histograms`: the normalised level histograms.
+-   :func:`channel_distance`: the per-channel distance of two histograms by a metric (:data:`METRICS`,
+    :data:`HISTOGRAM_METRICS`).
 
 Eq. 2: ``O = 1/3 sum_{lambda=R,G,B} sum_{n=0}^{n_L-1} |h_cg(n, lambda) - h_usr(n, lambda)|`` where h_cg and
 h_usr are the n_L-level histograms of the cloud pixels of the synthetic image and of the photograph, each
@@ -22,12 +32,20 @@ Metrics (all per channel, then averaged over R, G, B; all are distances: 0 = ide
 (n_L - 1), equal to ``cv2.EMD`` with DIST_L1 on 1-D signatures), and ``pixel_ssd``: the §5.1 pixel-by-pixel
 squared difference of encoded values in [0, 1], averaged over the synthetic cloud pixels (only meaningful
 when the target is an image of the same clouds, e.g. a synthetic target).
+
+References
+----------
+-   Dobashi, Y., Iwasaki, W., Ono, A., Yamamoto, T., Yue, Y., & Nishita, T. (2012). An inverse problem approach
+    for automatically adjusting the parameters for rendering clouds using photographs. ACM Transactions on
+    Graphics, 31(6).
 """
 from __future__ import annotations
 
 import numpy as np
 
 from natscene.color import linear_to_srgb
+
+__all__ = ["ENCODINGS", "HISTOGRAM_METRICS", "METRICS", "Levels", "histograms", "channel_distance", "objective"]
 
 ENCODINGS = ("srgb", "linear")
 HISTOGRAM_METRICS = ("difference", "correlation", "chi_square", "intersection", "bhattacharyya", "emd")

@@ -1,9 +1,23 @@
-"""The fitting problem of Dobashi et al. 2012, §3 (Eq. 1): argmin_c O(I_cg(c), I_usr).
+"""
+Fitting problem of the keyframe fit
+===================================
+
+Defines the fitting problem of Dobashi et al. (2012, §3, Eq. 1): argmin_c O(I_cg(c), I_usr).
+
+-   :class:`FitProblem`: O(c) for a population of candidates, kappa_a searched per channel.
+-   :func:`restrict_tables`: the tables kept only at the pixels of a mask, as a 1 x N image.
+-   :func:`params_dict`: the scatter contract's parameters for a population.
 
 Ties the precomputed tables (§4.3, ``natscene.scatter``), the photo's products (§4.1: cloud pixels, L_sky,
 c_in) and the objective with its kappa_a line search (Eqs. 2-3) into one function of the five GA
 parameters. For speed the tables are restricted once to the N pixels of the synthetic cloud footprint
 (reshaped to a 1 x N image), so every candidate image is composed only where its histogram is taken.
+
+References
+----------
+-   Dobashi, Y., Iwasaki, W., Ono, A., Yamamoto, T., Yue, Y., & Nishita, T. (2012). An inverse problem approach
+    for automatically adjusting the parameters for rendering clouds using photographs. ACM Transactions on
+    Graphics, 31(6).
 """
 from __future__ import annotations
 
@@ -16,6 +30,8 @@ from natscene.fit.genetic import PARAMS, fit_params
 from natscene.fit.kappa import KappaSearch
 from natscene.fit.objective import Levels
 from natscene.errors import InputError
+
+__all__ = ["restrict_tables", "params_dict", "FitProblem"]
 
 
 def restrict_tables(tables, mask: np.ndarray):

@@ -1,10 +1,24 @@
-"""What a person looks at after a fit (Dobashi et al. 2012, §1, §4, Fig. 6): the photo beside the ranked
+"""
+Reports of a fit
+================
+
+What a person looks at after a fit (Dobashi et al. 2012, §1, §4, Fig. 6): the photo beside the ranked
 synthetic images (the user picks one, §1) and the convergence of the objective (best and mean O per
 iteration, Fig. 6).
+
+-   :func:`contact_sheet`: the photo and the ranked images, labelled, as one image.
+-   :func:`convergence_plot`: the plot of the best and mean O per iteration.
+-   :func:`convergence_csv`: the same as CSV text.
 
 The contact sheet shows every image with the same exposure (1: the photo's own linear units, which are the
 units the objective compares), through the shared preview tone map (``natscene.io.to_srgb8``), each tile
 labelled with its rank and O.
+
+References
+----------
+-   Dobashi, Y., Iwasaki, W., Ono, A., Yamamoto, T., Yue, Y., & Nishita, T. (2012). An inverse problem approach
+    for automatically adjusting the parameters for rendering clouds using photographs. ACM Transactions on
+    Graphics, 31(6).
 """
 from __future__ import annotations
 
@@ -14,6 +28,8 @@ import numpy as np
 
 from natscene.io import atomic_path, to_srgb8
 from natscene.preview import label
+
+__all__ = ["contact_sheet", "convergence_plot", "convergence_csv"]
 
 
 def contact_sheet(photo: np.ndarray, images: list, labels: list, columns: int = 4, exposure: float = 1.0,

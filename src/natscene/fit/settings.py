@@ -1,65 +1,88 @@
-"""Settings of the keyframe fit (config section ``fit``; Dobashi 2012 §4.2 and §5): one dataclass per object of
+"""
+Settings of the keyframe fit
+============================
+
+Defines the settings of config section ``fit`` (Dobashi et al. 2012, §4.2 and §5): one dataclass per object of
 ``workflow/schemas/fit.schema.yaml``, whose defaults are the schema's (``tests/test_settings.py`` checks every
-pair), read from a validated section by :func:`natscene.config.settings_from_section`."""
+pair), read from a validated section by :func:`natscene.config.settings_from_section`.
+
+-   :func:`fit_settings`: the section as a :class:`FitSettings`.
+-   :class:`FitSettings`, :class:`KappaGridSettings`, :class:`GradientSettings`: the section and its objects.
+
+References
+----------
+-   Dobashi, Y., Iwasaki, W., Ono, A., Yamamoto, T., Yue, Y., & Nishita, T. (2012). An inverse problem approach
+    for automatically adjusting the parameters for rendering clouds using photographs. ACM Transactions on
+    Graphics, 31(6).
+"""
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass
 
 from natscene.config import settings_from_section
+
+__all__ = ["KappaGridSettings", "GradientSettings", "FitSettings", "fit_settings"]
 
 
 @dataclass(frozen=True)
 class KappaGridSettings:
     """The kappa_a values the line search tries per channel (Fig. 3; :func:`natscene.fit.kappa.kappa_grid`): ``fit.kappa``."""
 
-    min: float = 0.0
-    max: float = 1.0
-    step: float = 0.1
+    min: float
+    max: float
+    step: float
+
+    SCHEMA = (("fit.schema.yaml", ("kappa",)),)
 
 
 @dataclass(frozen=True)
 class GradientSettings:
     """The §5.1 finite-difference steepest-descent baseline (``fit.method: gradient``): ``fit.gradient``."""
 
-    h: float = 0.01
-    alpha0: float = 0.25
-    n_alpha: int = 10
-    max_iter: int = 100
+    h: float
+    alpha0: float
+    n_alpha: int
+    max_iter: int
+
+    SCHEMA = (("fit.schema.yaml", ("gradient",)),)
 
 
 @dataclass(frozen=True)
 class FitSettings:
     """The GA of §4.2 (population, bits, rates, scaling, the stop rule of epsilon_O, n_suc, n_max), the
-    objective (Eq. 2's levels and metric), the search ranges and the skylight of the all-orders transport."""
+    objective (Eq. 2's levels and metric), the search ranges and the skylight of the all-orders transport. No
+    field has a default here: the schema's are the only ones (:func:`fit_settings`)."""
 
     CONFIG_NAMES = {"epsilon_O": "epsilon_o"}
+    SCHEMA = (("fit.schema.yaml", ()),)
 
-    method: str = "ga"
-    population: int = 20
-    bits: int = 32
-    crossover_rate: float = 0.8
-    mutation_rate: float = 0.02
-    scaling: str = "linear"
-    ranges: dict = field(default_factory=dict)      # parameter -> [min, max]; missing: genetic.DEFAULT_RANGES
-    skylight: bool = True
-    ground_albedo: float = 0.2
-    kappa: KappaGridSettings = field(default_factory=KappaGridSettings)
-    epsilon_o: float = 0.5
-    n_suc: int = 20
-    n_max: int = 100
-    n_levels: int = 256
-    encoding: str = "srgb"
-    metric: str = "difference"
-    top_k: int = 10
-    distinct_tol: float = 0.01
-    gradient: GradientSettings = field(default_factory=GradientSettings)
-    contact_columns: int = 4
+    method: str
+    population: int
+    bits: int
+    crossover_rate: float
+    mutation_rate: float
+    scaling: str
+    ranges: dict                    # parameter -> [min, max] (the schema fills every parameter in)
+    skylight: bool
+    ground_albedo: float
+    kappa: KappaGridSettings
+    epsilon_o: float
+    n_suc: int
+    n_max: int
+    n_levels: int
+    encoding: str
+    metric: str
+    top_k: int
+    distinct_tol: float
+    gradient: GradientSettings
+    contact_columns: int
 
 
 def fit_settings(section: dict | None) -> FitSettings:
-    """:class:`FitSettings` of a validated ``fit`` section (its ``kappa`` and ``gradient`` objects included);
-    an unknown key raises ConfigError naming ``fit.<key>``."""
+    """:class:`FitSettings` of a validated ``fit`` section (its ``kappa`` and ``gradient`` objects included; a
+    part of one or None: each key it lacks the schema's default); an unknown key raises ConfigError naming
+    ``fit.<key>``."""
     s = dict(section or {})
     kappa = settings_from_section(KappaGridSettings, s.pop("kappa", None), "fit.kappa")
     gradient = settings_from_section(GradientSettings, s.pop("gradient", None), "fit.gradient")
-    return replace(settings_from_section(FitSettings, s, "fit"), kappa=kappa, gradient=gradient)
+    return settings_from_section(FitSettings, {**s, "kappa": kappa, "gradient": gradient}, "fit")

@@ -1,9 +1,22 @@
-"""A synthetic fit problem with a known answer: analytic tables of a homogeneous sphere and a gradient sky.
+"""
+Synthetic fit problem
+=====================
+
+A synthetic fit problem with a known answer: analytic tables of a homogeneous sphere and a gradient sky.
+
+-   :func:`sphere_tables`: the analytic tables of a homogeneous sphere (extinction scale :data:`EXT`).
+-   :func:`gradient_sky`: a blue sky brightening slightly toward the bottom of the image.
 
 The tables follow the shape of Dobashi 2012's Eqs. 5-9 in closed form (the path length through a sphere seen head
 on, a sun depth growing from left to right, multiple-scattering images falling geometrically with the order), so
 that a target rendered from known parameters can be fitted back. Used by the fit's tests and, without the main
 job's tables, by ``benchmarks/fit.py``.
+
+References
+----------
+-   Dobashi, Y., Iwasaki, W., Ono, A., Yamamoto, T., Yue, Y., & Nishita, T. (2012). An inverse problem approach
+    for automatically adjusting the parameters for rendering clouds using photographs. ACM Transactions on
+    Graphics, 31(6).
 """
 from __future__ import annotations
 

@@ -1,10 +1,23 @@
-"""The shot's frames as an animation and a filmstrip (Dobashi et al. 2012 Figs. 13, 15: snapshots of an
-animation).
+"""
+Animation and filmstrip of a shot
+=================================
+
+Defines the shot's frames as an animation and a filmstrip (Dobashi et al. 2012, Figs. 13, 15: snapshots of an
+animation):
+
+-   :func:`write_animation`: the frames as mp4 or gif; :func:`ffmpeg_available`, :func:`animation_suffix`: which.
+-   :func:`filmstrip`: frames side by side; :func:`strip_indices`: which frames; :func:`downscale`: to a height.
 
 ``write_animation``: an H.264 mp4 through imageio-ffmpeg (it ships its own ffmpeg binary; yuv420p, so
 frame sizes are padded to even numbers) or, where no encoder is available or the name ends in ``.gif``, an
 animated GIF (imageio/Pillow, looping). ``filmstrip``: n frames evenly spread over the shot (first and last
 included) side by side, downscaled to a common height (area averaging), with thin gaps.
+
+References
+----------
+-   Dobashi, Y., Iwasaki, W., Ono, A., Yamamoto, T., Yue, Y., & Nishita, T. (2012). An inverse problem approach
+    for automatically adjusting the parameters for rendering clouds using photographs. ACM Transactions on
+    Graphics, 31(6).
 """
 from __future__ import annotations
 
@@ -13,6 +26,8 @@ from pathlib import Path
 import numpy as np
 
 from natscene.io import atomic_path
+
+__all__ = ["ffmpeg_available", "animation_suffix", "write_animation", "downscale", "strip_indices", "filmstrip"]
 
 
 def ffmpeg_available() -> bool:

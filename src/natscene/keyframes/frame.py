@@ -1,5 +1,13 @@
-"""One frame of a shot: the forward renderer at the frame's camera, sun and parameters, the denoiser, and
-the ``mie_blend`` shading mode (Reimschuessel 2011 Ch. 3 on top of the project's cloud transport).
+"""
+One frame of a shot
+===================
+
+Defines one frame of a shot: the forward renderer at the frame's camera, sun and parameters, the denoiser, and
+the ``mie_blend`` shading mode (Reimschuessel 2011, Ch. 3, on top of the project's cloud transport):
+
+-   :func:`render_shot_frame`: render one frame of a shot.
+-   :func:`mie_terms`: the thesis' final pass for the Mie and the HG solution of the frame's sun.
+-   :func:`mie_ratio`, :func:`unscattered`, :func:`apply_ratio`: the Mie blend below.
 
 Order of work (:func:`render_shot_frame`):
 
@@ -35,12 +43,22 @@ Limits: the solution is solved at ``mie.solver.sigma_t`` and the Mie table's asy
 sigma_t and g; the ratio is a relative correction, so it is exact in the frame's level but its angular
 structure is that of a cloud of the solver's optical thickness. The ratio multiplies the cloud's skylight /
 ambient share too (the marcher's sun-only ratio is ~1 where that share matters, away from the sun).
+
+References
+----------
+-   Dobashi, Y., Iwasaki, W., Ono, A., Yamamoto, T., Yue, Y., & Nishita, T. (2012). An inverse problem approach
+    for automatically adjusting the parameters for rendering clouds using photographs. ACM Transactions on
+    Graphics, 31(6).
+-   Reimschuessel, C. A. (2011). Rendering Realistic Cloud Effects for Computer Generated Films. MSc thesis,
+    Brigham Young University.
 """
 from __future__ import annotations
 
 import numpy as np
 
 from natscene.errors import InputError
+
+__all__ = ["mie_ratio", "unscattered", "apply_ratio", "mie_terms", "render_shot_frame"]
 
 
 def mie_ratio(m_mie: np.ndarray, m_hg: np.ndarray, transmittance: np.ndarray | None = None,
@@ -77,18 +95,15 @@ def apply_ratio(frame: np.ndarray, background: np.ndarray, ratio: np.ndarray) ->
 def mie_terms(volume, camera, mie: dict) -> dict:
     """The thesis' final pass (Eqs. 6-8) for the Mie and the HG solution of this sun at ``camera``:
     {M_mie, M_hg (H, W, 3) cloud radiance per unit sun, T (H, W), ratio}. ``mie``: {solution_mie,
-    solution_hg, table_mie, table_hg, render (the `mie.render` settings), eps_rel}."""
-    from natscene.mie.march import march_terms
+    solution_hg, table_mie, table_hg, render (the `mie.render` settings, or its march keys), eps_rel}."""
+    from natscene.mie.march import march_terms, mie_render
 
-    r = dict(mie.get("render") or {})
-    kw = {"mie_scale": r.get("mie_scale", 1.0), "iso_scale": r.get("iso_scale", 1.0),
-          "step_voxels": r.get("step_voxels", 1.0), "sun_step_voxels": r.get("sun_step_voxels", 1.0),
-          "field_smooth": r.get("field_smooth", 1.0)}
+    r = mie_render(mie.get("render"))
     s_m, s_h = mie["solution_mie"], mie["solution_hg"]
     if float(np.dot(s_m.points.sun_dir, s_h.points.sun_dir)) < 1 - 1e-9:
         raise InputError("mie_blend: the Mie and HG point-to-point solutions were solved for different suns")
-    m_mie, T = march_terms(volume, camera, s_m, mie["table_mie"], **kw)
-    m_hg, _ = march_terms(volume, camera, s_h, mie["table_hg"], **kw)
+    m_mie, T = march_terms(volume, camera, s_m, mie["table_mie"], r)
+    m_hg, _ = march_terms(volume, camera, s_h, mie["table_hg"], r)
     return {"M_mie": m_mie, "M_hg": m_hg, "T": T,
             "ratio": mie_ratio(m_mie, m_hg, T, float(mie.get("eps_rel", 0.02)))}
 
@@ -112,7 +127,9 @@ def render_shot_frame(volume, state: dict, shot: dict, mie: dict | None = None, 
     from natscene.denoise.oidn import denoise_frame
     from natscene.keyframes.shot import frame_camera
     from natscene.keyframes.sky import sky_image
+    from natscene.scatter.allorders import frame_settings
     from natscene.scatter.render import render
+    from natscene.sky.daylight import skylight
 
     log = log or (lambda msg: None)
     timings = {}
@@ -120,19 +137,24 @@ def render_shot_frame(volume, state: dict, shot: dict, mie: dict | None = None, 
     sun = np.asarray(state["sun"]["direction"], np.float64)
     p = {k: np.asarray(v, np.float64) for k, v in state["params"].items()}
     t = time.perf_counter()
-    sky = sky_image(camera, sun, shot.get("sky") or {})
+    sky_settings = skylight(shot["sky"])
+    sky = sky_image(camera, sun, sky_settings)
     timings["sky_s"] = time.perf_counter() - t
     t = time.perf_counter()
-    raw, comp = render(volume, camera, sun, p, sky, return_components=True, sky_settings=shot.get("sky"),
-                       **dict(shot.get("render") or {}))
+    r = shot["render"]
+    all_orders = frame_settings(r) if r["transport"] == "all_orders" else None
+    raw, comp = render(volume, camera, sun, p, sky, orders=r["orders"], spp=r["spp"], seed=r["seed"],
+                       step_voxels=r["step_voxels"], supersample=r["supersample"], return_components=True,
+                       transport=r["transport"], sky_settings=sky_settings, ground_albedo=r["ground_albedo"],
+                       all_orders=all_orders)
     timings["render_s"] = time.perf_counter() - t
-    d = dict(shot.get("denoiser") or {})
+    d = shot["denoiser"]
     t = time.perf_counter()
-    feats = frame_features(volume, camera, p, sky, supersample=d.get("feature_supersample", 2),
-                           step_voxels=d.get("feature_step_voxels", 1.0))
+    feats = frame_features(volume, camera, p, sky, supersample=d["feature_supersample"],
+                           step_voxels=d["feature_step_voxels"])
     timings["features_s"] = time.perf_counter() - t
     final = raw
-    if shot.get("denoise", "oidn") == "oidn":
+    if shot["denoise"] == "oidn":
         if denoiser is None:
             raise ValueError("render_shot_frame: denoise is 'oidn' but no denoiser was given")
         t = time.perf_counter()
@@ -140,7 +162,7 @@ def render_shot_frame(volume, state: dict, shot: dict, mie: dict | None = None, 
         timings["denoise_s"] = time.perf_counter() - t
     out = {"raw": raw, "final": final, "features": feats, "camera": camera, "timings": timings,
            "photons": comp.get("photons")}
-    if shot.get("phase", "hg") == "mie_blend":
+    if shot["phase"] == "mie_blend":
         if mie is None:
             raise ValueError("render_shot_frame: phase is 'mie_blend' but no Mie solutions were given")
         t = time.perf_counter()

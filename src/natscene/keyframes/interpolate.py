@@ -1,6 +1,14 @@
-"""Interpolation between keyframes (Dobashi et al. 2012 §5.2, §6: "the parameters are then interpolated to
-render the clouds between the key frames"; Fig. 13: "the parameters for the in-between images are linearly
-interpolated").
+"""
+Interpolation between keyframes
+===============================
+
+Defines the interpolation between keyframes (Dobashi et al. 2012, §5.2, §6: "the parameters are then
+interpolated to render the clouds between the key frames"; Fig. 13: "the parameters for the in-between images are
+linearly interpolated"):
+
+-   :func:`lerp`, :func:`slerp`, :func:`catmull_rom`: linear, spherical linear and Catmull-Rom interpolation.
+-   :func:`ease` (:data:`EASINGS`), :func:`segment_t`: the eased position of a frame in its segment.
+-   :func:`direction_to_sun_angles`: the sun's azimuth and elevation of a direction.
 
 - scalars (L_in, g, extinction, beta, L_amb) and colours (c_in, kappa_a per channel): linear, as in the paper;
 - the sun direction: spherical linear interpolation (slerp) of the unit vectors toward the sun, so it stays
@@ -10,10 +18,22 @@ interpolated").
   pyramidal form), which passes through every keyframe with a continuous velocity;
 - easing of the segment parameter t in [0, 1]: ``linear`` (none, the paper), ``smoothstep`` (3t^2 - 2t^3)
   or ``sine`` ((1 - cos(pi t)) / 2): both ease in and out, so the motion stops at each keyframe.
+
+References
+----------
+-   Barry, P. J., & Goldman, R. N. (1988). A recursive evaluation algorithm for a class of Catmull-Rom splines.
+    SIGGRAPH '88, 199–204.
+-   Catmull, E., & Rom, R. (1974). A class of local interpolating splines. In Computer Aided Geometric Design,
+    317–326. Academic Press.
+-   Dobashi, Y., Iwasaki, W., Ono, A., Yamamoto, T., Yue, Y., & Nishita, T. (2012). An inverse problem approach
+    for automatically adjusting the parameters for rendering clouds using photographs. ACM Transactions on
+    Graphics, 31(6).
 """
 from __future__ import annotations
 
 import numpy as np
+
+__all__ = ["EASINGS", "ease", "segment_t", "lerp", "slerp", "direction_to_sun_angles", "catmull_rom"]
 
 EASINGS = ("linear", "smoothstep", "sine")
 

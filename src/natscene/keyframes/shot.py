@@ -1,4 +1,15 @@
-"""A shot: keyframes on a frame axis and the parameter set of every frame (Dobashi et al. 2012 §5.2, §6).
+"""
+Keyframes of a shot
+===================
+
+Defines a shot: keyframes on a frame axis and the parameter set of every frame (Dobashi et al. 2012, §5.2, §6):
+
+-   :func:`validate_shot`, :func:`sorted_keyframes`, :func:`resolve_keyframe`: a shot's keyframes from the config.
+-   :func:`keyframe_params`: a keyframe's full parameter set (:data:`PARAMS`, :data:`COLOURS`).
+-   :func:`bracket`, :func:`camera_neighbours`: the keyframes a frame depends on.
+-   :func:`frame_t`, :func:`frame_sun`, :func:`frame_state`, :func:`frame_camera`: a frame's position, sun,
+    state and camera.
+-   :func:`quantised_sun`, :func:`sun_key`: the sun rounded for rule ``point_scatter`` and its wildcard.
 
 Each keyframe names a fitted parameter set (``fit: <config keyframe>``, the chosen set of
 ``results/fit/<keyframe>/params.yaml``) and/or explicit parameters (which override the fitted ones), a sun
@@ -6,6 +17,12 @@ direction and a camera (both default to those of the fit's view). A frame betwee
 those two only (and, with the Catmull-Rom camera path, on the cameras of their neighbours), which is what
 lets the workflow rerun only the frames a keyframe edit affects. Frames before the first / after the last
 keyframe hold that keyframe.
+
+References
+----------
+-   Dobashi, Y., Iwasaki, W., Ono, A., Yamamoto, T., Yue, Y., & Nishita, T. (2012). An inverse problem approach
+    for automatically adjusting the parameters for rendering clouds using photographs. ACM Transactions on
+    Graphics, 31(6).
 """
 from __future__ import annotations
 
@@ -17,6 +34,10 @@ from natscene.errors import InputError
 from natscene.geometry import sun_direction
 from natscene.keyframes.interpolate import (catmull_rom, direction_to_sun_angles, ease, lerp, segment_t,
                                             slerp)
+
+__all__ = ["PARAMS", "COLOURS", "validate_shot", "sorted_keyframes", "resolve_keyframe", "bracket",
+           "camera_neighbours", "keyframe_params", "frame_t", "frame_sun", "quantised_sun", "sun_key", "frame_state",
+           "frame_camera"]
 
 PARAMS = ("L_in", "g", "extinction", "beta", "L_amb")  # scalars, interpolated linearly (L_amb: dobashi transport, 0 if absent)
 COLOURS = ("c_in", "kappa_a")  # RGB triples, interpolated linearly per channel

@@ -1,4 +1,12 @@
-"""Leaf colour from pigment concentrations (Dong 2007 §4.3.3).
+"""
+Leaf colour from pigment concentrations
+=======================================
+
+Defines the leaf colour of Dong (2007, §4.3.3) from pigment concentrations:
+
+-   :func:`leaf_rgb`: the linear sRGB of a leaf with normalised pigment concentrations.
+-   :func:`prospect_reflectance`: the PROSPECT-D reflectance of a leaf.
+-   :func:`reflectance_to_rgb`: Eqs. 4.1-4.2, reflectance spectra to linear sRGB.
 
 Dong subtracts pigment absorbance from the light in the spectral domain (Eq. 4.9,
 R = L - T_0 - A_0 - sum_p c_p A_p). We use the PROSPECT-D leaf optics model instead (through the
@@ -11,6 +19,12 @@ reflector has Y = 1, and converted to linear sRGB by natscene.color.
 
 Normalised concentrations c map to contents: Cab = c_ch * cab_max (ug/cm^2), Car = c_ca * car_max,
 Anth = c_an * ant_max.
+
+References
+----------
+-   Dong, W. (2007). Rendering Algorithms for Natural Scenes. PhD thesis, Université Henri Poincaré - Nancy I.
+-   Féret, J.-B., Gitelson, A. A., Noble, S. D., & Jacquemoud, S. (2017). PROSPECT-D: Towards modeling leaf
+    optical properties through a complete lifecycle. Remote Sensing of Environment, 193, 204–215.
 """
 from __future__ import annotations
 
@@ -19,6 +33,8 @@ import numpy as np
 from natscene.color import xyz_to_linear_srgb
 from natscene.patterns.pigments import GRID, WAVELENGTHS
 from natscene.spectral.grid import cmfs, illuminant_table
+
+__all__ = ["prospect_reflectance", "reflectance_to_rgb", "leaf_rgb"]
 
 
 def prospect_reflectance(cab: float, car: float, ant: float, n: float = 1.5, cbrown: float = 0.0,

@@ -1,4 +1,15 @@
-"""Seasonal pigment concentrations of maple leaves (Dong 2007 §4.3.1-4.3.2, Eqs. 4.3-4.8).
+"""
+Seasonal pigment concentrations of maple leaves
+===============================================
+
+Defines the seasonal pigment concentrations of maple leaves of Dong (2007, §4.3.1-4.3.2, Eqs. 4.3-4.8):
+
+-   :func:`simulate_season`: the daily concentrations of one year (a :class:`Season`) for a :class:`Climate`
+    and :class:`SeasonParams`.
+-   :func:`normal_climate`, :func:`apply_case`: the normal year and the climate cases of Fig. 4.5.
+-   :func:`alpha`: Eq. 4.3.
+-   :func:`stage_days`: the days the leaf turns yellow and red.
+-   :func:`parse_date`: a date to a day index (:data:`DAYS` a year).
 
 Climate: daily series over one year (day 0 = 1 January) of sunlight I_s (relative flux, 1 = clear
 midsummer), temperature (deg C) and precipitation I_p (mm/day). The temperature driver of the alpha
@@ -19,6 +30,10 @@ Carotene: constant c_ca.
 The leaf exists from ``leaf_out`` to ``leaf_fall``; concentrations before leaf-out are 0.
 Climate cases (Fig. 4.5): normal; precipitation deficiency (summer rain x ``factor``); warm autumn
 (+``delta_T`` deg C from ``start``); sunlight deficiency (sunlight x ``factor`` from ``start``).
+
+References
+----------
+-   Dong, W. (2007). Rendering Algorithms for Natural Scenes. PhD thesis, Université Henri Poincaré - Nancy I.
 """
 from __future__ import annotations
 
@@ -27,6 +42,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from natscene.errors import InputError
+
+__all__ = ["DAYS", "Climate", "normal_climate", "apply_case", "SeasonParams", "Season", "alpha", "simulate_season",
+           "stage_days", "parse_date"]
 
 DAYS = 365
 
@@ -75,21 +93,26 @@ def apply_case(base: Climate, case: dict) -> Climate:
 
 @dataclass
 class SeasonParams:
-    u: float = 1.0            # surrounding-environment weight (Eq. 4.3)
-    T_base: float = 5.0       # growing-degree base (deg C)
-    T_stop: float = 11.0       # chlorophyll synthesis substrate threshold (deg C)
-    a_c: float = 0.08         # composition efficiency (per day per unit light)
-    K_c: float = 5.0          # Michaelis constant of composition (deg C)
-    a_d: float = 0.1         # decomposition efficiency
-    K_d: float = 0.3          # Michaelis constant of decomposition
-    k_an: float = 0.06        # anthocyanin rate constant (Eq. 4.8)
-    X_c: float = 10.0         # half-response temperature (deg C)
-    n: int = 5                # threshold steepness (Dong: n = 5)
-    sugar_scale: float = 30.0  # photosynthate that saturates the sugar gate
-    c_ca: float = 0.35        # constant carotene
-    leaf_out: int = 110
-    leaf_fall: int = 330
-    chl_scale: float = 0.18   # divides c_ch: the normal-year summer peak becomes ~1
+    """The season model's parameters (config ``leaves.season``; no defaults here: workflow/schemas/leaves.schema.yaml's
+    are the only ones, :func:`natscene.config.settings_from_section`)."""
+
+    u: float                  # surrounding-environment weight (Eq. 4.3)
+    T_base: float             # growing-degree base (deg C)
+    T_stop: float             # chlorophyll synthesis substrate threshold (deg C)
+    a_c: float                # composition efficiency (per day per unit light)
+    K_c: float                # Michaelis constant of composition (deg C)
+    a_d: float                # decomposition efficiency
+    K_d: float                # Michaelis constant of decomposition
+    k_an: float               # anthocyanin rate constant (Eq. 4.8)
+    X_c: float                # half-response temperature (deg C)
+    n: int                    # threshold steepness (Dong: n = 5)
+    sugar_scale: float        # photosynthate that saturates the sugar gate
+    c_ca: float               # constant carotene
+    leaf_out: int
+    leaf_fall: int
+    chl_scale: float          # divides c_ch: the normal-year summer peak becomes ~1
+
+    SCHEMA = (("leaves.schema.yaml", ("season",)),)
 
 
 @dataclass
@@ -107,8 +130,11 @@ def alpha(series: np.ndarray, annual_normal: float, u: float) -> np.ndarray:
     return u * np.cumsum(series) / annual_normal
 
 
-def simulate_season(climate: Climate, normal: Climate, p: SeasonParams = SeasonParams()) -> Season:
-    """Daily c_ch, c_ca, c_an over one year (Eqs. 4.3-4.8)."""
+def simulate_season(climate: Climate, normal: Climate, p: SeasonParams | None = None) -> Season:
+    """Daily c_ch, c_ca, c_an over one year (Eqs. 4.3-4.8); ``p``: the parameters (None: the schema's defaults)."""
+    if p is None:
+        from natscene.config import default_settings
+        p = default_settings(SeasonParams)
     gdd = lambda c: np.maximum(c.temperature - p.T_base, 0.0)
     a_s = alpha(climate.sunlight, normal.sunlight.sum(), p.u)
     a_d = alpha(gdd(climate), gdd(normal).sum(), p.u)

@@ -1,5 +1,13 @@
-"""Leaf textures (Dong 2007 §4.3.3, Fig. 4.6): "a basic map containing spatial variance information such
-as the venation pattern is used to improve the final results".
+"""
+Leaf textures
+=============
+
+Defines the leaf textures of Dong (2007, §4.3.3, Fig. 4.6): "a basic map containing spatial variance information
+such as the venation pattern is used to improve the final results".
+
+-   :func:`leaf_texture`: the RGBA texture of a leaf for one date's concentrations.
+-   :func:`maple_mask`, :func:`maple_venation`: the procedural maple outline and its primary veins.
+-   :func:`base_map`: the colouring-order map and the luminance detail map.
 
 Leaf shape: a procedural palmate (maple-like) outline, in polar coordinates around the petiole,
 r(phi) = R * (base + (1 - base) * |cos(lobes * phi / 2)|^sharp), clipped to the upper half-plane
@@ -9,6 +17,10 @@ chlorophyll longest (the interveinal tissue and the margin colour first), plus s
 (seeded Gaussian-filtered noise). Per-cell pigments: c_ch(x) = c_ch * (1 - spread * (m(x) - 0.5)),
 c_an(x) = c_an * (1 + spread * (m(x) - 0.5)). Colours come from PROSPECT-D (leaves.optics) evaluated
 on a few levels of m and interpolated (vectorised), times a detail map (vein shading).
+
+References
+----------
+-   Dong, W. (2007). Rendering Algorithms for Natural Scenes. PhD thesis, Université Henri Poincaré - Nancy I.
 """
 from __future__ import annotations
 
@@ -17,6 +29,8 @@ from scipy import ndimage
 
 from natscene.leaves.optics import leaf_rgb
 from natscene.patterns.venation import Venation, venation_from_nodes
+
+__all__ = ["maple_mask", "maple_venation", "base_map", "leaf_texture"]
 
 
 def maple_mask(size: int, lobes: int = 5, base: float = 0.45, sharp: float = 0.6) -> np.ndarray:

@@ -1,6 +1,18 @@
-"""Cameras that frame the effects of the Mie shading (Reimschuessel 2011, Ch. 4, Fig. 11; the rule
-``mie_render``'s shots, config ``mie.demo``): one sun, cameras placed around the cloud so that the same
-point-cloud solution is reused (the thesis' view independence). :func:`effect_camera`:
+"""
+Cameras of the Mie effect shots
+===============================
+
+Defines the cameras that frame the effects of the Mie shading (Reimschuessel 2011, Ch. 4, Fig. 11; the rule
+``mie_render``'s shots, config ``mie.demo``):
+
+-   :func:`effect_camera`: the camera of one effect shot (:data:`SHOTS`).
+-   :func:`deck_camera`, :func:`deck_top`, :func:`deck_aim`: a camera above a stratocumulus deck, the sun
+    behind it.
+-   :func:`silver_lining_camera`: a camera behind the cloud looking at the hidden sun.
+-   :func:`scattering_angle_at_centre`: the phase angle at a camera's look-at point.
+
+One sun, cameras placed around the cloud so that the same point-cloud solution is reused (the thesis' view
+independence). :func:`effect_camera`:
 
 - ``glory``: camera between the sun and the cloud, the cloud centre at the antisolar point (θ = 180°);
 - ``fogbow``: the cloud centre ``fogbow_angle`` degrees from the antisolar point (θ = 180° - that);
@@ -20,12 +32,21 @@ Where nature shows these effects (and so where the shots look for them):
   droplets (4π p(0°) in the thousands, ≈ 1–2° wide) lights the thin edge brilliantly within a degree or
   two of the sun. :func:`silver_lining_camera` finds such a line of sight (sun behind ≥ ``hide_tau`` of
   cloud, the nearest clear sky ``edge_deg`` away, on the cloud's upper edge) and frames it narrowly.
+
+References
+----------
+-   Laven, P. (2005). Atmospheric glories: simulations and observations. Applied Optics, 44(27), 5667–5674.
+-   Reimschuessel, C. A. (2011). Rendering Realistic Cloud Effects for Computer Generated Films. MSc thesis,
+    Brigham Young University.
 """
 from __future__ import annotations
 
 import numpy as np
 
 from natscene.geometry import Camera, rotate
+
+__all__ = ["SHOTS", "effect_camera", "deck_top", "deck_aim", "deck_camera", "silver_lining_camera",
+           "scattering_angle_at_centre"]
 
 SHOTS = ("glory", "fogbow", "silver_lining")
 

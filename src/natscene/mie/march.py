@@ -1,4 +1,16 @@
-"""Final ray marching with the Mie/isotropic blend (Reimschuessel 2011, Ch. 3 "Final Rendering", Eqs. 6–8).
+"""
+Final ray marching with the Mie/isotropic blend
+===============================================
+
+Defines the final rendering of Reimschuessel (2011, Ch. 3 "Final Rendering", Eqs. 6–8):
+
+-   :func:`render_mie`: the Mie-blend shading of one view.
+-   :func:`march_terms`: the cloud radiance per unit sun and the transmittance of one camera.
+-   :func:`lattice_fields`: the solved point cloud as a brickmap on its light-aligned lattice.
+-   :func:`per_sun_fields`: the final pass's per-sun inputs, cached on the solution.
+-   :func:`sun_depth_lattice`: the sunlight's optical depth on a finer light-aligned lattice.
+-   :func:`co_lut`: A_m for the scattered light, averaged over the solid angle of a neighbour cell.
+-   :func:`mie_render`: the settings of the final pass (config ``mie.render``) as a :class:`MieRender`.
 
 The solved point cloud is resampled on its light-aligned lattice (the thesis' brickmap: a 3-D texture
 of Co, R_i, L_i) with *normalised* trilinear lookups (the interpolated fields divided by the interpolated
@@ -24,8 +36,15 @@ every camera ray is marched through the volume with step ``step_voxels`` voxels.
 ``phase="hg"`` (by passing an HG :class:`~natscene.mie.phase.PhaseTable`) gives the same marcher with
 Henyey–Greenstein: a like-for-like comparison. The kernel is compiled with numba (a dependency of
 miepython), one parallel loop over pixels.
+
+References
+----------
+-   Reimschuessel, C. A. (2011). Rendering Realistic Cloud Effects for Computer Generated Films. MSc thesis,
+    Brigham Young University.
 """
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 from numba import njit, prange
@@ -34,6 +53,9 @@ from natscene.errors import InputError
 from natscene.geometry import ray_box
 from natscene.mie.phase import PhaseTable
 from natscene.mie.solver import Solution, cone_averaged_lut
+
+__all__ = ["co_lut", "lattice_fields", "sun_depth_lattice", "MieRender", "mie_render", "per_sun_fields", "march_terms",
+           "render_mie"]
 
 
 def co_lut(table: PhaseTable) -> np.ndarray:
@@ -87,7 +109,7 @@ def _sun_depth(dens, vlo, vinv, origin, basis, h, sigma_e, out):
             prev = cur
 
 
-def sun_depth_lattice(volume, points, step_voxels: float = 1.0):
+def sun_depth_lattice(volume, points, step_voxels: float):
     """The sunlight's optical depth τ_sun on a light-aligned lattice of spacing ``step_voxels`` voxels
     (origin and axes of the point cloud's lattice): ``Ci = exp(-τ_sun)`` is the direct sunlight of the
     thesis' input point cloud, here known at every node (not only at points, and finer than the point
@@ -214,14 +236,46 @@ def _march(origin, dirs, t0, t1, dens, vlo, vinv, fields, forigin, fbasis, finv,
         out_T[p] = np.exp(-tau)
 
 
-def per_sun_fields(volume, solution: Solution, table: PhaseTable, field_smooth: float = 1.0,
-                   sun_step_voxels: float = 1.0):
+@dataclass(frozen=True)
+class MieRender:
+    """The settings of the final pass (config ``mie.render``): the light of the demo shots (``c_in``, ``L_in``,
+    ``L_amb``, ``sky_color``) and the march (Table 4's ``mie_scale``, ``iso_scale``; ``step_voxels``,
+    ``sun_step_voxels``, ``field_smooth``), which mie_blend frames use too. No field has a default here: they are
+    the schema's, ``workflow/schemas/mie.schema.yaml`` (:func:`mie_render`)."""
+
+    c_in: tuple
+    L_in: float
+    L_amb: float
+    sky_color: tuple
+    mie_scale: float
+    iso_scale: float
+    step_voxels: float
+    sun_step_voxels: float
+    field_smooth: float
+
+    SCHEMA = (("mie.schema.yaml", ("render",)),)
+
+
+def mie_render(settings: dict | MieRender | None) -> MieRender:
+    """The one place that reads ``mie.render``: a validated section (or a part of one, or None) as a
+    :class:`MieRender`, each key it lacks the schema's default (:func:`natscene.config.settings_from_section`);
+    a :class:`MieRender` is returned as it is."""
+    if isinstance(settings, MieRender):
+        return settings
+    from natscene.config import settings_from_section
+    return settings_from_section(MieRender, settings, "mie.render")
+
+
+def per_sun_fields(volume, solution: Solution, table: PhaseTable, settings: dict | MieRender | None = None):
     """The final pass's per-sun inputs, cached on ``solution.cache`` (the thesis' reuse: they depend on the
     volume, the sun and the solution, not on the view or the light colour): the brickmap fields
-    (:func:`lattice_fields`), the sun's optical-depth lattice (:func:`sun_depth_lattice`) and the
-    cone-averaged LUT of the Co term (:func:`co_lut`). Entries are keyed by their settings and hold a
+    (:func:`lattice_fields`, smoothed by ``field_smooth``), the sun's optical-depth lattice
+    (:func:`sun_depth_lattice`, spacing ``sun_step_voxels``) and the cone-averaged LUT of the Co term
+    (:func:`co_lut`); ``settings``: :func:`mie_render`'s. Entries are keyed by their settings and hold a
     reference to the volume's density / the table they were made from, so another volume or table is
     never served a stale entry. -> (fields, (τ, spacing), lut_co)."""
+    r = mie_render(settings)
+    field_smooth, sun_step_voxels = r.field_smooth, r.sun_step_voxels
     c = solution.cache
     key = ("fields", float(field_smooth))
     if key not in c:
@@ -239,17 +293,20 @@ def per_sun_fields(volume, solution: Solution, table: PhaseTable, field_smooth: 
     return fields, taus, e[1]
 
 
-def march_terms(volume, camera, solution: Solution, table: PhaseTable, mie_scale: float = 1.0,
-                iso_scale: float = 1.0, step_voxels: float = 1.0, sun_step_voxels: float = 1.0,
-                return_direct: bool = False, field_smooth: float = 1.0):
+def march_terms(volume, camera, solution: Solution, table: PhaseTable, settings: dict | MieRender | None = None,
+                return_direct: bool = False):
     """(cloud radiance per unit sun (H, W, 3), transmittance T (H, W)) for one camera; with
-    ``return_direct`` also the direct-sunlight (single scattering) part of the radiance (H, W, 3)."""
+    ``return_direct`` also the direct-sunlight (single scattering) part of the radiance (H, W, 3).
+    ``settings``: the march's (``mie_scale``, ``iso_scale``, ``step_voxels``, ``sun_step_voxels``,
+    ``field_smooth``) of :func:`mie_render`."""
+    r = mie_render(settings)
+    mie_scale, iso_scale, step_voxels = r.mie_scale, r.iso_scale, r.step_voxels
     dirs = camera.ray_directions().reshape(-1, 3)
     org = np.asarray(camera.position, np.float64)
     lo, hi = np.asarray(volume.bbox_min, float), np.asarray(volume.bbox_max, float)
     t0, t1 = ray_box(np.broadcast_to(org, dirs.shape), dirs, lo, hi)
     vs = float(np.min(volume.voxel_size))
-    fields, (taus, h_tau), lut_co = per_sun_fields(volume, solution, table, field_smooth, sun_step_voxels)
+    fields, (taus, h_tau), lut_co = per_sun_fields(volume, solution, table, r)
     p = solution.points
     rad = np.zeros((len(dirs), 3))
     direct = np.zeros((len(dirs), 3))
@@ -265,13 +322,14 @@ def march_terms(volume, camera, solution: Solution, table: PhaseTable, mie_scale
     return res + (direct.reshape(h, w, 3).astype(np.float32),) if return_direct else res
 
 
-def render_mie(volume, camera, sun_dir, solution: Solution, table: PhaseTable, params: dict,
+def render_mie(volume, camera, sun_dir, solution: Solution, table: PhaseTable, params: dict | MieRender | None,
                sky: np.ndarray | None = None, terms: dict | None = None) -> np.ndarray:
     """The Mie-blend shading of one view -> (H, W, 3) linear radiance.
 
-    ``params``: ``c_in`` (3,) sun colour, ``L_in`` sun intensity, ``L_amb`` ambient intensity,
-    optional ``mie_scale``, ``iso_scale`` (Table 4, default 1), ``sky_color`` (3,) (default: the mean of
-    ``sky``), ``step_voxels`` (default 1), ``sun_step_voxels`` (1), ``field_smooth`` (1). ``sky``: (H, W, 3) linear L_sky behind the cloud, or None.
+    ``params``: the ``mie.render`` settings (:func:`mie_render`: a validated section, a part of one or a
+    :class:`MieRender`): ``c_in`` (3,) sun colour, ``L_in`` sun intensity, ``L_amb`` ambient intensity,
+    ``sky_color`` (3,) (None: the mean of ``sky``) and the march's settings. ``sky``: (H, W, 3) linear L_sky
+    behind the cloud, or None.
     The solution must have been solved for ``sun_dir`` (the thesis' reuse: any view, any light colour).
     ``terms``: a dict that receives ``direct`` (H, W, 3), the single-scattered sunlight part of the
     radiance (where the glory and the fogbow live), and ``T`` (H, W).
@@ -281,22 +339,18 @@ def render_mie(volume, camera, sun_dir, solution: Solution, table: PhaseTable, p
         raise InputError("render_mie: the point-cloud solution was solved for another sun direction "
                          f"({np.round(solution.points.sun_dir, 4).tolist()} vs {np.round(sd, 4).tolist()}); "
                          "rerun rule point_scatter for this sun")
-    cloud, T, direct = march_terms(volume, camera, solution, table, params.get("mie_scale", 1.0),
-                                   params.get("iso_scale", 1.0), params.get("step_voxels", 1.0),
-                                   params.get("sun_step_voxels", 1.0), return_direct=True,
-                                   field_smooth=params.get("field_smooth", 1.0))
+    r = mie_render(params)
+    cloud, T, direct = march_terms(volume, camera, solution, table, r, return_direct=True)
     h, w = camera.height, camera.width
     if sky is None:
         sky = np.zeros((h, w, 3), np.float32)
     sky = np.asarray(sky, np.float32)
     if sky.shape != (h, w, 3):
         raise InputError(f"render_mie: sky has shape {sky.shape}, expected {(h, w, 3)} for this camera")
-    c_in = np.broadcast_to(np.asarray(params.get("c_in", (1.0, 1.0, 1.0)), np.float32), (3,))
-    sky_color = np.asarray(params["sky_color"], np.float32) if params.get("sky_color") is not None \
-        else sky.reshape(-1, 3).mean(0)
+    c_in = np.broadcast_to(np.asarray(r.c_in, np.float32), (3,))
+    sky_color = np.asarray(r.sky_color, np.float32) if r.sky_color is not None else sky.reshape(-1, 3).mean(0)
     if terms is not None:
-        terms["direct"] = (c_in * float(params.get("L_in", 1.0)) * direct).astype(np.float32)
+        terms["direct"] = (c_in * float(r.L_in) * direct).astype(np.float32)
         terms["T"] = T
-    out = c_in * float(params.get("L_in", 1.0)) * cloud \
-        + float(params.get("L_amb", 0.0)) * sky_color * (1 - T)[..., None] + T[..., None] * sky
+    out = c_in * float(r.L_in) * cloud + float(r.L_amb) * sky_color * (1 - T)[..., None] + T[..., None] * sky
     return out.astype(np.float32)

@@ -1,11 +1,26 @@
-"""Measurements of the Mie effects on rendered images (Reimschuessel 2011, Ch. 4): the azimuthal profile around
-the antisolar point and the contrast of the glory's first bright ring, the silver-lining rim's peak brightness.
-Used by the rule ``mie_render``'s summaries and the tests of the effects."""
+"""
+Measures of the Mie effects on images
+=====================================
+
+Defines the measures of the Mie effects on rendered images (Reimschuessel 2011, Ch. 4), used by the rule
+``mie_render``'s summaries and the tests of the effects:
+
+-   :func:`angular_profile`: the azimuthal profile around a direction (the antisolar point).
+-   :func:`ring_contrast`: the contrast of the glory's first bright ring in a radial profile.
+-   :func:`rim_peak`: the silver-lining rim's peak brightness.
+
+References
+----------
+-   Reimschuessel, C. A. (2011). Rendering Realistic Cloud Effects for Computer Generated Films. MSc thesis,
+    Brigham Young University.
+"""
 from __future__ import annotations
 
 import numpy as np
 
 from natscene.geometry import Camera
+
+__all__ = ["angular_profile", "ring_contrast", "rim_peak"]
 
 
 def angular_profile(img: np.ndarray, camera: Camera, direction, max_deg: float = 4.0, step_deg: float = 0.1):

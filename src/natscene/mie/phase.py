@@ -1,4 +1,19 @@
-"""Mie phase function of cloud droplets (Reimschuessel 2011, Ch. 3 "Scattering Function", Fig. 3).
+"""
+Mie phase function of cloud droplets
+====================================
+
+Defines the Mie phase tables of Reimschuessel (2011, Ch. 3 "Scattering Function", Fig. 3):
+
+-   :func:`compute_mie_table`: the phase table of a gamma droplet population at the RGB primaries
+    (:data:`RGB_WAVELENGTHS_NM`) and a spectral grid, as a :class:`PhaseTable`.
+-   :func:`hg_table`: a Henyey–Greenstein table in the same format.
+-   :func:`mie_phase_polydisperse`, :func:`gamma_size_distribution`, :func:`water_index`: the population's
+    phase function, size distribution and the refractive index of water.
+-   :func:`radius_grid`, :func:`angle_grid_deg`, :func:`sphere_integral`, :func:`asymmetry`: the grids and
+    integrals over the sphere.
+-   :func:`fogbow_peak_deg`, :func:`glory_ring_deg`: where the fogbow and the first glory ring are.
+-   :func:`write_table`, :func:`read_table`, :func:`table_channels`, :func:`plot_table`: the table on disk and
+    its Fig. 3 plot.
 
 The thesis shades clouds with the wavelength-dependent Mie phase function of water droplets (taken from
 Bouthors 2008), looked up by the phase angle. Here it is computed with ``miepython`` for a polydisperse
@@ -21,6 +36,17 @@ droplet population:
 The table is the ``A_m = Mie(θ)`` of Eqs. 4–6 (as ``4π p``: 1 for isotropic scattering, see
 :mod:`natscene.mie.solver`). A Henyey–Greenstein table in the same format (:func:`hg_table`, the HG function of
 :mod:`natscene.phase`) gives like-for-like comparisons.
+
+References
+----------
+-   Bouthors, A., Neyret, F., Max, N., Bruneton, E., & Crassin, C. (2008). Interactive multiple anisotropic
+    scattering in clouds. Proceedings of the 2008 Symposium on Interactive 3D Graphics and Games, 173–182.
+-   Hale, G. M., & Querry, M. R. (1973). Optical constants of water in the 200-nm to 200-µm wavelength region.
+    Applied Optics, 12(3), 555–563.
+-   Hansen, J. E. (1971). Multiple scattering of polarized light in planetary atmospheres. Part II. Sunlight
+    reflected by terrestrial water clouds. Journal of the Atmospheric Sciences, 28(8), 1400–1426.
+-   Reimschuessel, C. A. (2011). Rendering Realistic Cloud Effects for Computer Generated Films. MSc thesis,
+    Brigham Young University.
 """
 from __future__ import annotations
 
@@ -30,6 +56,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from natscene.phase import hg
+
+__all__ = ["RGB_WAVELENGTHS_NM", "water_index", "gamma_size_distribution", "radius_grid", "angle_grid_deg",
+           "sphere_integral", "asymmetry", "mie_phase_polydisperse", "PhaseTable", "compute_mie_table", "hg_table",
+           "fogbow_peak_deg", "glory_ring_deg", "table_channels", "write_table", "read_table", "plot_table"]
 
 os.environ.setdefault("MIEPYTHON_USE_JIT", "1")  # 60x faster; must be set before miepython is imported
 

@@ -1,5 +1,13 @@
-"""Point cloud generation by ray marching the volume from the sun (Reimschuessel 2011, Ch. 3 "Generating
-the point cloud", Fig. 5, Table 1).
+"""
+Point cloud of the Mie shading
+==============================
+
+Defines the point cloud generation by ray marching the volume from the sun (Reimschuessel 2011, Ch. 3
+"Generating the point cloud", Fig. 5, Table 1):
+
+-   :func:`generate_points`: march the volume from the sun on a light-aligned lattice into a :class:`PointCloud`.
+-   :func:`light_basis`: the light's propagation direction and the plane across it.
+-   :func:`sample_density`: the trilinear density at world points.
 
 The thesis renders the cloud with the sun as the camera and adds a point at every ray-marching step. Here
 the sun's "camera" is orthographic (the sun is a parallel light): rays parallel to the light's
@@ -19,6 +27,11 @@ Each point stands for a cell of side ``h``; the fraction of the light entering i
 ``s_i = 1 - exp(-σ_e D_i h)``, so that ``Σ_i Ci_i s_i`` over a ray telescopes to ``1 - T_ray`` exactly:
 the sunlight that entered the cloud (used by the energy checks). σ_e = ``sigma_t · extinction_scale``
 (the project's extinction convention, DESIGN §3).
+
+References
+----------
+-   Reimschuessel, C. A. (2011). Rendering Realistic Cloud Effects for Computer Generated Films. MSc thesis,
+    Brigham Young University.
 """
 from __future__ import annotations
 
@@ -28,6 +41,8 @@ import numpy as np
 from scipy.ndimage import map_coordinates
 
 from natscene.errors import InputError
+
+__all__ = ["light_basis", "sample_density", "PointCloud", "generate_points"]
 
 
 def light_basis(sun_dir) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -1,8 +1,23 @@
-"""The picture of the Mie/isotropic ratio R_i of Reimschuessel 2011, Fig. 8: a slice of the solved point cloud
-through its middle, along the light (the ratio itself: :func:`natscene.mie.solver.solve`, Eq. 1)."""
+"""
+Slice of the Mie/isotropic ratio
+================================
+
+Defines the picture of the Mie/isotropic ratio R_i of Reimschuessel (2011, Fig. 8): a slice of the solved point
+cloud through its middle, along the light (the ratio itself: :func:`natscene.mie.solver.solve`, Eq. 1).
+
+-   :func:`ratio_slice`: R_i on the lattice slice through the middle containing the light direction.
+-   :func:`ratio_image`: the slice as a grey image.
+
+References
+----------
+-   Reimschuessel, C. A. (2011). Rendering Realistic Cloud Effects for Computer Generated Films. MSc thesis,
+    Brigham Young University.
+"""
 from __future__ import annotations
 
 import numpy as np
+
+__all__ = ["ratio_slice", "ratio_image"]
 
 
 def ratio_slice(solution) -> np.ndarray:

@@ -1,4 +1,13 @@
-"""Mitsuba 3 reference of the Mie/isotropic shading (Reimschuessel 2011, Ch. 3).
+"""
+Mitsuba 3 reference of the Mie shading
+======================================
+
+Defines a path-traced reference of the Mie/isotropic shading of Reimschuessel (2011, Ch. 3):
+
+-   :func:`render_reference_mie`: the ``volpath`` image of the cloud lit by the sun.
+-   :func:`reference_scene`: the loaded Mitsuba scene of one channel.
+-   :func:`ratio_grid`: R_i resampled on the volume's voxel centres.
+-   :func:`tabphase_values`: the ``values`` string of a ``tabphase`` for one channel of the table.
 
 The same cloud, sun and camera as :func:`natscene.mie.march.render_mie`, rendered by path tracing
 (``volpath``) with the phase function the point-cloud solution implies:
@@ -17,6 +26,11 @@ The same cloud, sun and camera as :func:`natscene.mie.march.render_mie`, rendere
 marcher's direct-sunlight term (sharp table, ``Ci = exp(-τ_sun)``) when R = 1 (a solution with 0 passes). With
 more depth it is the path-traced answer to the question the point-to-point passes approximate (multiple
 scattering with a Mie/isotropic phase), comparable only loosely (see tests/test_mie_reference.py).
+
+References
+----------
+-   Reimschuessel, C. A. (2011). Rendering Realistic Cloud Effects for Computer Generated Films. MSc thesis,
+    Brigham Young University.
 """
 from __future__ import annotations
 
@@ -31,6 +45,8 @@ from natscene.mie.phase import PhaseTable
 from natscene.mie.solver import Solution
 from natscene.scatter.medium import active_mitsuba
 from natscene.scatter.mitsuba_scene import scene_dict
+
+__all__ = ["ratio_grid", "tabphase_values", "reference_scene", "render_reference_mie"]
 
 
 def ratio_grid(volume, solution: Solution) -> np.ndarray:

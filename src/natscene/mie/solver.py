@@ -1,5 +1,17 @@
-"""Point-to-point light scattering passes with the Mie/isotropic ratio R_i (Reimschuessel 2011, Ch. 3
-"Simulating light scattering", Eqs. 1–5, Figs. 6–8).
+"""
+Point-to-point scattering passes
+================================
+
+Defines the light scattering passes with the Mie/isotropic ratio R_i of Reimschuessel (2011, Ch. 3
+"Simulating light scattering", Eqs. 1–5, Figs. 6–8):
+
+-   :func:`solve`: run the scattering passes on a point cloud; the result as a :class:`Solution`.
+-   :func:`update_mie_isotropic_ratio`: Eq. 1, the thesis' main function, after a pass.
+-   :func:`neighbour_pairs`: the pairs of points that exchange light.
+-   :func:`cone_averaged_lut`: A_m averaged over a cone around each phase angle.
+-   :func:`full_neighbourhood_fraction`: the fraction of isotropically scattered light a point would deposit
+    in a full neighbourhood.
+-   :func:`save_solution`, :func:`load_solution`: the solution on disk.
 
 Every pass exchanges light between neighbouring points (within ``radius`` lattice spacings, found once
 with a KD-tree, ``scipy.spatial.cKDTree.query_pairs``; never all pairs), in both directions of every pair,
@@ -29,6 +41,11 @@ vectorised over all pairs with numpy:
   input point cloud).
 
 The solution depends on the sun direction only; it is reused for any view and light colour.
+
+References
+----------
+-   Reimschuessel, C. A. (2011). Rendering Realistic Cloud Effects for Computer Generated Films. MSc thesis,
+    Brigham Young University.
 """
 from __future__ import annotations
 
@@ -41,6 +58,9 @@ from natscene.color import LUMA_709
 from natscene.errors import InputError
 from natscene.mie.phase import PhaseTable
 from natscene.mie.points import PointCloud
+
+__all__ = ["Solution", "neighbour_pairs", "cone_averaged_lut", "full_neighbourhood_fraction",
+           "update_mie_isotropic_ratio", "solve", "save_solution", "load_solution"]
 
 
 @dataclass

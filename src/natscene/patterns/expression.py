@@ -1,4 +1,15 @@
-"""Flower colour expression of Dong 2007 §3.4 (Eqs. 3.6-3.10).
+"""
+Flower colour expression
+========================
+
+Defines the flower colour expression of Dong (2007, §3.4, Eqs. 3.6-3.10):
+
+-   :func:`precompute`: the Eq. 3.8 terms of a set of pigments, as a :class:`ColourTable`.
+-   :func:`express_xyz`, :func:`express_rgb`: Eq. 3.9, the colour of pigment concentrations in XYZ and linear
+    sRGB.
+-   :func:`lightness`: Eq. 3.10.
+-   :func:`tissue_transmittance`: the transmittance of a pigment-free tissue layer.
+-   :func:`chromaticity`: CIE (x, y) of XYZ.
 
 Light L(lambda) (CIE illuminant, default D65, from colour-science), petal tissue transmittance T(lambda)
 and pigment absorption A(lambda) give the reflected spectrum R = L - T - A (§3.4.1). Precomputed:
@@ -20,6 +31,17 @@ itself has Y = 1, and converted to linear sRGB by natscene.color.
 Tissue transmittance T: the PROSPECT-D transmittance of a pigment-free petal layer (N = 1.2,
 water 0.005 cm, dry matter 0.002 g/cm^2), i.e. measured leaf-tissue optics standing in for the
 "typical plant tissue" data of [TSP00, SG02].
+
+References
+----------
+-   Dong, W. (2007). Rendering Algorithms for Natural Scenes. PhD thesis, Université Henri Poincaré - Nancy I.
+-   Féret, J.-B., Gitelson, A. A., Noble, S. D., & Jacquemoud, S. (2017). PROSPECT-D: Towards modeling leaf
+    optical properties through a complete lifecycle. Remote Sensing of Environment, 193, 204–215.
+-   Sims, D. A., & Gamon, J. A. (2002). Relationships between leaf pigment content and spectral reflectance
+    across a wide range of species, leaf structures and developmental stages. Remote Sensing of Environment,
+    81, 337–354.
+-   Thenkabail, P. S., Smith, R. B., & De Pauw, E. (2000). Hyperspectral vegetation indices and their
+    relationships with agricultural crop characteristics. Remote Sensing of Environment, 71, 158–182.
 """
 from __future__ import annotations
 
@@ -32,6 +54,9 @@ from natscene.color import xyz_to_linear_srgb
 from natscene.errors import InputError
 from natscene.patterns.pigments import GRID, WAVELENGTHS, Pigment
 from natscene.spectral.grid import cmfs, illuminant_table
+
+__all__ = ["tissue_transmittance", "ColourTable", "precompute", "express_xyz", "lightness", "express_rgb",
+           "chromaticity"]
 
 
 @lru_cache(maxsize=4)

@@ -1,4 +1,14 @@
-"""Pigment absorption spectra for flower colour expression (Dong 2007 §3.4) and leaf colour (Ch. 4).
+"""
+Pigment absorption spectra
+==========================
+
+Defines the pigment absorption spectra for flower colour expression (Dong 2007, §3.4) and leaf colour (Ch. 4):
+
+-   :func:`pigment`: a :class:`Pigment` from a config entry.
+-   :func:`prospect_specific_absorption`: the PROSPECT-D specific absorption of a pigment
+    (:data:`PROSPECT_PIGMENTS`).
+-   :func:`band_absorption`: the parametric absorption-band model (:data:`BAND_PIGMENTS`).
+-   :data:`GRID`, :data:`WAVELENGTHS`: the wavelength grid of the spectra.
 
 Measured spectra: the specific absorption coefficients of chlorophyll a+b, carotenoids and anthocyanins
 of PROSPECT-D (Féret et al. 2017), shipped by the ``prosail`` package (cm^2/ug, 400-2500 nm, 1 nm).
@@ -15,6 +25,12 @@ with band centres from the pigment literature: betanin (red-violet betacyanin) 5
 Wavelength grid: :data:`GRID`, a :class:`natscene.spectral.grid.WavelengthGrid` of 400-770 nm in 5 nm steps.
 Dong integrates over 380-770 nm; PROSPECT-D starts at 400 nm, and the CIE 1931 colour-matching functions carry
 < 0.2 % of Y below 400 nm.
+
+References
+----------
+-   Dong, W. (2007). Rendering Algorithms for Natural Scenes. PhD thesis, Université Henri Poincaré - Nancy I.
+-   Féret, J.-B., Gitelson, A. A., Noble, S. D., & Jacquemoud, S. (2017). PROSPECT-D: Towards modeling leaf
+    optical properties through a complete lifecycle. Remote Sensing of Environment, 193, 204–215.
 """
 from __future__ import annotations
 
@@ -25,6 +41,9 @@ import numpy as np
 
 from natscene.errors import InputError
 from natscene.spectral.grid import WavelengthGrid
+
+__all__ = ["GRID", "WAVELENGTHS", "BAND_PIGMENTS", "PROSPECT_PIGMENTS", "prospect_specific_absorption",
+           "band_absorption", "Pigment", "pigment"]
 
 #: the wavelength grid of the pigment spectra, flower colour expression and leaf colour
 GRID = WavelengthGrid(400.0, 770.0, 5.0)

@@ -1,5 +1,20 @@
-"""Assembling a pattern job from its config entry: petal shape, venation, reaction-diffusion parameters
-(Dong 2007 Table 3.3 presets for the four patterns of Fig. 3.3) and pigments."""
+"""
+Presets of the pattern jobs
+===========================
+
+Defines the assembly of a pattern job from its config entry: petal shape, venation, reaction-diffusion parameters
+(Dong 2007, Table 3.3 presets for the four patterns of Fig. 3.3) and pigments.
+
+-   :func:`petal_shape`, :func:`venation`, :func:`rd_params`: the petal mask, the vein tree and the
+    reaction-diffusion parameters of a config entry.
+-   :func:`preset_state`: the constants of a Fig. 3.3 preset beyond Table 3.3 (:data:`FIG_3_3_STATE`) on a grid.
+-   :data:`TABLE_3_3`: Table 3.3's rows for Fig. 3.3(b); :data:`REFERENCE_HEIGHT`: the grid height the
+    presets' constants are set for.
+
+References
+----------
+-   Dong, W. (2007). Rendering Algorithms for Natural Scenes. PhD thesis, Université Henri Poincaré - Nancy I.
+"""
 from __future__ import annotations
 
 import numpy as np
@@ -9,6 +24,8 @@ from natscene.errors import InputError
 from natscene.io import read_mask
 from natscene.patterns.reaction_diffusion import RDParams, schnakenberg_constants
 from natscene.patterns.venation import parametric_petal, radial_venation_spec, venation_from_nodes
+
+__all__ = ["TABLE_3_3", "REFERENCE_HEIGHT", "FIG_3_3_STATE", "preset_state", "petal_shape", "venation", "rd_params"]
 
 #: Table 3.3 rows for Fig. 3.3(b): S, D_A, D_B, t (the remaining constants are RDParams defaults)
 TABLE_3_3 = {

@@ -1,4 +1,14 @@
-"""Recolouring a flower photograph with a pigment pattern (Dong 2007 §3.5, Fig. 3.8).
+"""
+Recolouring a flower photograph
+===============================
+
+Defines the recolouring of a flower photograph with a pigment pattern (Dong 2007, §3.5, Fig. 3.8):
+
+-   :func:`recolour_photo`: the whole §3.5 pipeline on one photo (config entry, :data:`DEFAULTS`).
+-   :func:`recolour`: the YIQ recolouring of a photo with a colour texture.
+-   :func:`flower_mask`: the petal shape of a photo.
+-   :func:`standard_concentration`: C_0 of c = C / C_0.
+-   :func:`vein_contrast`, :func:`mean_hue`: the diagnostics of the report.
 
 "We split the original image in YIQ space, and extract the shape and venation information. Then we
 redefine the I channel with user-appointed pigment, and replace the Q channel with the pigment
@@ -23,6 +33,10 @@ Diagnostics for the report: ``vein_contrast`` (mean of a map on the vascular cel
 
 ``flower_mask`` extracts the petal shape: saturated, not-too-dark pixels (HSV saturation >= s_min and
 value >= v_min of the encoded photo), cleaned by a morphological opening and hole filling.
+
+References
+----------
+-   Dong, W. (2007). Rendering Algorithms for Natural Scenes. PhD thesis, Université Henri Poincaré - Nancy I.
 """
 from __future__ import annotations
 
@@ -30,7 +44,11 @@ import numpy as np
 from scipy import ndimage
 
 from natscene.color import linear_srgb_to_lab, linear_to_srgb, srgb_to_linear, srgb_to_yiq, yiq_to_srgb
+from natscene.config import section_defaults
 from natscene.errors import InputError
+
+__all__ = ["flower_mask", "standard_concentration", "vein_contrast", "mean_hue", "recolour", "DEFAULTS",
+           "recolour_photo"]
 
 
 def flower_mask(photo_linear: np.ndarray, s_min: float = 0.35, v_min: float = 0.08) -> np.ndarray:
@@ -85,10 +103,8 @@ def recolour(photo_linear: np.ndarray, colour_linear: np.ndarray, base_linear: n
     return np.where(m, rgb, photo_linear[..., :3]).astype(np.float32)
 
 
-#: defaults of a ``recolour`` config entry for library calls (the workflow fills them from
-#: workflow/schemas/recolour.schema.yaml; tests/test_config.py checks the two agree)
-DEFAULTS = dict(sim_width=160, root=[0.37, 0.42], s_min=0.35, v_min=0.08, rd={"preset": "radial_stripes"},
-                pigments=["anthocyanin", "blank"], concentration=1.0, c0_percentile=99.0)
+#: defaults of a ``recolour`` config entry for library calls: the schema's, workflow/schemas/recolour.schema.yaml
+DEFAULTS = section_defaults("recolour.schema.yaml", ("additionalProperties",))
 
 
 def recolour_photo(photo_path, spec: dict, seed: int = 0, logger=None) -> dict:

@@ -1,9 +1,24 @@
-"""Shape descriptors of a pigment map on a petal, used to check the four Fig. 3.3 patterns of Dong 2007 (centre
-spot, marginal band, ring, radial stripes): the radial profile from the vein root to the petal margin and the
-angular (vein / inter-vein) contrast."""
+"""
+Shape descriptors of a pigment map
+==================================
+
+Defines shape descriptors of a pigment map on a petal, used to check the four Fig. 3.3 patterns of Dong (2007)
+(centre spot, marginal band, ring, radial stripes):
+
+-   :func:`radial_profile`: the radial profile from the vein root to the petal margin.
+-   :func:`angular_contrast`: the angular (vein / inter-vein) contrast.
+-   :func:`polar_coordinates`: the angle from the root and the relative distance rho (root 0, margin 1) of every
+    petal pixel.
+
+References
+----------
+-   Dong, W. (2007). Rendering Algorithms for Natural Scenes. PhD thesis, Université Henri Poincaré - Nancy I.
+"""
 from __future__ import annotations
 
 import numpy as np
+
+__all__ = ["polar_coordinates", "radial_profile", "angular_contrast"]
 
 
 def polar_coordinates(mask: np.ndarray, root) -> tuple[np.ndarray, np.ndarray]:

@@ -1,4 +1,14 @@
-"""Petal shape and venation input of Dong 2007 §3.3.1.
+"""
+Petal shape and venation
+========================
+
+Defines the petal shape and venation input of Dong (2007, §3.3.1):
+
+-   :class:`Venation`: the vascular cells of a petal grid.
+-   :func:`venation_from_nodes`: a vein tree rasterised onto the grid; :func:`radial_venation_spec`: a fan of
+    veins in that format.
+-   :func:`venation_from_photo`: a connected vein tree extracted from a photograph.
+-   :func:`parametric_petal`: a procedural petal mask.
 
 The shape is a black/white mask (petal = 1). The venation is "a set of vein nodes, including a vein root
 and vein width": here a tree of nodes in normalised image coordinates (x right, y down, both in [0, 1]),
@@ -17,6 +27,13 @@ from the distance transform of the thresholded ridge mask.
 ``parametric_petal`` draws a petal outline procedurally: in polar coordinates around the base,
 ``r(phi) = L * sin(pi * s)^p * (1 + notch * cos(2 pi * lobes * s))`` with ``s`` the normalised opening
 angle, giving the rounded, slightly lobed shapes of Fig. 3.3 (petunia) and the daisy of Fig. 3.5.
+
+References
+----------
+-   Dong, W. (2007). Rendering Algorithms for Natural Scenes. PhD thesis, Université Henri Poincaré - Nancy I.
+-   Sato, Y., Nakajima, S., Shiraga, N., Atsumi, H., Yoshida, S., Koller, T., Gerig, G., & Kikinis, R. (1998).
+    Three-dimensional multi-scale line filter for segmentation and visualization of curvilinear structures in
+    medical images. Medical Image Analysis, 2(2), 143–168.
 """
 from __future__ import annotations
 
@@ -26,6 +43,8 @@ import numpy as np
 from scipy import ndimage
 
 from natscene.errors import InputError
+
+__all__ = ["Venation", "parametric_petal", "venation_from_nodes", "radial_venation_spec", "venation_from_photo"]
 
 
 @dataclass

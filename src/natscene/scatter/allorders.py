@@ -1,4 +1,17 @@
-"""The all-orders transport: every scattering order of the sun's light and the skylight, per pixel, by bands.
+"""
+All-orders images of one view
+=============================
+
+Defines the band images of the all-orders transport: every scattering order of the sun's light and the
+skylight, per pixel, by bands (the remedies of Dobashi et al. 2012, §7):
+
+-   :class:`AllOrdersSettings`, :func:`settings_from_config`, :func:`frame_settings`: the transport's settings
+    (of the precompute, of a shot's frames).
+-   :class:`Lighting`, :class:`Scene`: what lights the cloud, and the volume prepared once for a view.
+-   :func:`view_images`: the band images of one view at (sigma_t, g), as two independent halves
+    (:class:`ViewImages`).
+-   :func:`standard_error`, :func:`budget_scale`: the per-pixel noise of two halves, and the photon count a noise
+    target needs.
 
 Dobashi 2012 truncates multiple scattering at order 4 and adds a constant ambient term L_amb (§3); his §7
 names both limits and the remedy (order bands after Bouthors et al. 2008, the skylight as a light source).
@@ -25,11 +38,18 @@ depth toward the camera).
 
 Effort goes where the variance is: the number of photons is set from a collision budget (a short pilot run
 measures the collisions per photon at this sigma_t, g), because the noise of a cell falls with the
-collisions in it, and a thin cloud (sigma_t = 0.1) makes five times fewer collisions per photon than a
-thick one (sigma_t = 1). With ``importance`` the photons split where the camera sees the cloud and its flux is
-low and are rouletted deep inside (:func:`weight_window`, :mod:`natscene.scatter.importance`), and a share of
-the sky photons comes from a lobe of directions toward the camera (:meth:`natscene.scatter.photons.SkySource.toward`).
+collisions in it, and a thin cloud makes fewer collisions per photon than a thick one. With ``importance``
+the photons split where the camera sees the cloud and its flux is low and are rouletted deep inside
+(:func:`weight_window`, :mod:`natscene.scatter.importance`), and a share of the sky photons comes from a lobe of directions toward the camera (:meth:`natscene.scatter.photons.SkySource.toward`).
 With a ``noise_target`` a node that misses it after its budget is topped up with more photons (:func:`view_images`).
+
+References
+----------
+-   Bouthors, A., Neyret, F., Max, N., Bruneton, E., & Crassin, C. (2008). Interactive multiple anisotropic
+    scattering in clouds. Proceedings of the 2008 Symposium on Interactive 3D Graphics and Games, 173–182.
+-   Dobashi, Y., Iwasaki, W., Ono, A., Yamamoto, T., Yue, Y., & Nishita, T. (2012). An inverse problem approach
+    for automatically adjusting the parameters for rendering clouds using photographs. ACM Transactions on
+    Graphics, 31(6).
 """
 from __future__ import annotations
 
@@ -39,38 +59,48 @@ import numpy as np
 
 from natscene.scatter.bands import SKY_BANDS, SUN_BANDS, fit_ratios
 
+__all__ = ["AllOrdersSettings", "settings_from_config", "frame_settings", "Lighting", "Scene", "ViewImages",
+           "view_images", "standard_error", "budget_scale"]
+
 FINE_UP_TO_ORDER = 4
 
 
-@dataclass
+@dataclass(kw_only=True)
 class AllOrdersSettings:
-    """Settings of the all-orders transport (config ``precompute.all_orders`` / ``shots.<name>.render``)."""
+    """Settings of the all-orders transport (config ``precompute.all_orders`` with the precompute's
+    ``step_voxels`` and ``supersample``: :func:`settings_from_config`; a shot's frames: :func:`frame_settings`).
+    A configurable field has no default here: the schema's (``workflow/schemas/precompute.schema.yaml``) are the
+    only ones (:func:`natscene.config.default_settings` builds the default instance); the fields with a default
+    are not configurable."""
 
-    sun_collisions: int = 16_000_000
-    sky_collisions: int = 6_000_000
-    sun_photons_max: int = 3_000_000      # a thin cloud (few collisions per photon) is not traced forever
-    sky_photons_max: int = 2_000_000
-    fine_voxels: int = 2
-    coarse_voxels: int = 4
-    guide_width: tuple = (0.0, 0.0)      # optical depth, fine and coarse cache (0: no smoothing)
-    max_order: int = 4096
-    tally_rate: float = 1.0               # tally samples per voxel length at least, along every flight in cloud
+    sun_collisions: int
+    sky_collisions: int
+    sun_photons_max: int                  # a thin cloud (few collisions per photon) is not traced forever
+    sky_photons_max: int
+    fine_voxels: int
+    coarse_voxels: int
+    guide_width: tuple                    # optical depth, fine and coarse cache (0: no smoothing)
+    max_order: int
+    similarity_order: int                 # high orders by similarity from this order on (0: every order exact)
+    tally_rate: float                     # tally samples per voxel length at least, along every flight in cloud
     sun_bands: tuple = SUN_BANDS
     sky_bands: tuple = SKY_BANDS
     majorant_voxels: int = 4
-    step_voxels: float = 0.5
-    supersample: int = 4
-    p_ground: float = 0.25
-    importance: bool = True               # weight windows: split / roulette photons toward what the camera sees
-    importance_floor: float = 0.05        # the window's visibility far behind the visible skin (relative)
+    step_voxels: float
+    supersample: int
+    p_ground: float = 0.25                # share of the sky photons that come from the ground
+    importance: bool                      # weight windows: split / roulette photons toward what the camera sees
+    importance_floor: float               # the window's visibility far behind the visible skin (relative)
     window_voxels: int = 4                # the window's cells
-    split_max: int = 8                    # most copies of one photon at one collision
-    sky_lobe_share: float = 0.2           # sky photons drawn from a lobe of directions toward the camera
+    split_max: int                        # most copies of one photon at one collision
+    sky_lobe_share: float                 # sky photons drawn from a lobe of directions toward the camera
     sky_lobe_g: float = 0.7               # the lobe's HG asymmetry
-    camera_lobe: float = 0.6              # share of the visible scatterings drawn around the direction to the
-                                          # camera (angle biasing; the frames' renderer turns it off)
-    noise_target: tuple = (0.0, 0.0)      # median, p95 of a node's relative standard error (0: fixed budget)
-    max_budget_scale: float = 8.0         # most photons a node gets, in units of the collision budget's
+    camera_lobe: float                    # share of the visible scatterings drawn around the direction to the
+                                          # camera (angle biasing; the frames turn it off)
+    noise_target: tuple                   # median, p95 of a node's relative standard error (0: fixed budget)
+    max_budget_scale: float               # most photons a node gets, in units of the collision budget's
+
+    SCHEMA = (("precompute.schema.yaml", ("all_orders",)), ("precompute.schema.yaml", ()))
 
 
 def settings_from_config(precompute: dict) -> AllOrdersSettings:
@@ -80,6 +110,27 @@ def settings_from_config(precompute: dict) -> AllOrdersSettings:
     section = dict(precompute.get("all_orders") or {})
     section.update({k: precompute[k] for k in ("step_voxels", "supersample") if k in precompute})
     return settings_from_section(AllOrdersSettings, section, "precompute.all_orders")
+
+
+def frame_settings(render: dict | None) -> AllOrdersSettings:
+    """The settings of a shot's frames, from its render section (a validated ``shots.<name>.render``, or a part of
+    one: each key it lacks the schema's default): the precompute's defaults with the shot's collision budgets,
+    ``tally_rate``, ``ground_share`` (the share of the sky photons that come from the ground, ``p_ground``),
+    ``similarity_order``, ``step_voxels`` and ``supersample``; the angle biasing toward the camera off (``camera_lobe`` 0: on the main
+    job's day frame it cut the noise figure by 13 % for about 20 % more time; docs/stages/precompute.md); photon
+    caps that follow the budgets (at most one photon per two collisions, or the precompute's caps where higher).
+    The one place where a shot's render settings become the transport's."""
+    from dataclasses import replace
+
+    from natscene.config import complete_section, default_settings
+    r = complete_section(render, "shots.schema.yaml", ("additionalProperties", "render"), "shots.<name>.render")
+    st = default_settings(AllOrdersSettings)
+    return replace(st, sun_collisions=int(r["sun_collisions"]), sky_collisions=int(r["sky_collisions"]),
+                   tally_rate=float(r["tally_rate"]), p_ground=float(r["ground_share"]),
+                   step_voxels=r["step_voxels"], supersample=r["supersample"], camera_lobe=0.0,
+                   similarity_order=int(r["similarity_order"]),
+                   sun_photons_max=max(st.sun_photons_max, int(r["sun_collisions"]) // 2),
+                   sky_photons_max=max(st.sky_photons_max, int(r["sky_collisions"]) // 2))
 
 
 @dataclass
@@ -198,7 +249,7 @@ def weight_window(scene: Scene, source, sigma: float, g: float, camera, seed: in
     f = int(st.window_voxels)
     t = trace(scene.med, scene.grid, source, sigma, g, camera.position, pilot, ((1, 1), (2, None)),
               caches=((f, None),), seed=seed + 65537, max_order=st.max_order, k_min=1,
-              tally_rate=st.tally_rate, phase=False)
+              tally_rate=st.tally_rate, phase=False, similarity_order=st.similarity_order)
     tallies = t.numerators[0].sum(0)                        # (2 bands, cz, cy, cx): first flight, the rest
     rho = np.asarray(scene.volume.density, np.float64)
     mass = block_sum(rho, f)
@@ -220,7 +271,8 @@ def photons_for(scene: Scene, source, sigma: float, g: float, camera, collisions
     from natscene.scatter.photons import trace
     t = trace(scene.med, scene.grid, source, sigma, g, camera.position, pilot, ((1, None),),
               caches=((scene.factors[1], None),), seed=seed + 104729, max_order=scene.settings.max_order,
-              k_min=10 ** 9, window=window, split_max=scene.settings.split_max)
+              k_min=10 ** 9, window=window, split_max=scene.settings.split_max,
+              similarity_order=scene.settings.similarity_order)
     per = max(t.collisions / pilot, 1e-3)
     n = int(min(max(collisions / per, 4 * pilot), 64 * collisions))
     return n if most is None else min(n, int(most))
@@ -233,7 +285,8 @@ def _trace_halves(scene: Scene, source, sigma: float, g: float, camera, n_photon
     return [trace(scene.med, scene.grid, source, sigma, g, camera.position, max(1, n_photons // 2), bands,
                   caches=_caches(scene, bands), seed=seed * 2 + h, max_order=scene.settings.max_order, k_min=k_min,
                   camera_depth=camera_depth, tally_rate=scene.settings.tally_rate, window=window,
-                  split_max=scene.settings.split_max, camera_lobe=scene.settings.camera_lobe)
+                  split_max=scene.settings.split_max, camera_lobe=scene.settings.camera_lobe,
+                  similarity_order=scene.settings.similarity_order)
             for h in range(2)]
 
 

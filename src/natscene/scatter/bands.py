@@ -1,4 +1,15 @@
-"""Scattering orders grouped into bands, with the closed-form albedo dependence of each band.
+"""
+Order bands
+===========
+
+Defines the grouping of scattering orders into bands, with the closed-form albedo dependence of each band
+(Dobashi et al. 2012, §7; Bouthors et al. 2008):
+
+-   :data:`SUN_BANDS`, :data:`SKY_BANDS`: the default bands of the sun's and the sky's light.
+-   :func:`check_bands`: validate contiguous bands with an open last band.
+-   :func:`band_table`: the band index of every order.
+-   :func:`fit_ratios`: each band's geometric ratio r_b from the order histogram.
+-   :func:`band_weights`: the albedo weights c_b(beta) of the bands.
 
 Dobashi 2012 §7 proposes to "cluster high orders of scattering into several sets (e.g. 2, 3-4, 5-6, and so
 on) as proposed by Bouthors et al. [2008]". The all-orders transport stores, per pixel, the light of each
@@ -12,10 +23,20 @@ ratio r_b fitted to the order histogram of the whole cloud (the light of each ex
 tracing); the high orders of a thick medium do decay geometrically, so the open last band is a geometric
 tail, c(beta) = beta^a (1 - r) / (1 - r beta). The composition stays a linear combination of per-pixel
 images with weights that are closed-form functions of beta, as Dobashi's Eq. 8.
+
+References
+----------
+-   Bouthors, A., Neyret, F., Max, N., Bruneton, E., & Crassin, C. (2008). Interactive multiple anisotropic
+    scattering in clouds. Proceedings of the 2008 Symposium on Interactive 3D Graphics and Games, 173–182.
+-   Dobashi, Y., Iwasaki, W., Ono, A., Yamamoto, T., Yue, Y., & Nishita, T. (2012). An inverse problem approach
+    for automatically adjusting the parameters for rendering clouds using photographs. ACM Transactions on
+    Graphics, 31(6).
 """
 from __future__ import annotations
 
 import numpy as np
+
+__all__ = ["SUN_BANDS", "SKY_BANDS", "check_bands", "band_table", "fit_ratios", "band_weights"]
 
 SUN_BANDS = ((2, 2), (3, 3), (4, 4), (5, 8), (9, 16), (17, 32), (33, 64), (65, None))
 SKY_BANDS = ((1, 1), (2, 8), (9, None))

@@ -1,5 +1,13 @@
-"""Image composition from the precomputed tables (Dobashi 2012 Eqs. 3 and 4), vectorised over a whole GA
-population.
+"""
+Image composition
+=================
+
+Defines the composition of cloud images from the precomputed tables (Dobashi et al. 2012, §4.3, Eqs. 3 and 4),
+vectorised over a whole GA population:
+
+-   :func:`compose_cloud`: L_c of Eq. 4 for a population, by the tables' transport.
+-   :func:`apply_atmosphere`: L_cg of Eq. 3.
+-   :func:`compose`: both, with each set's kappa_a.
 
 For each parameter set (c_in, L_in, g, e, beta, L_amb, kappa_a; e the extinction coefficient in 1/m, mu_t = e rho)
 and pixel q the cloud's radiance is Eq. 4, L_c = L_s + L_m + L_b, with single scattering
@@ -13,6 +21,12 @@ The tables are interpolated linearly in e and g (bilinearly for the multiple sca
 are clamped to its ends (:mod:`natscene.scatter.nodes`). The GA's fast path (``pixels=``) composes only the N pixels it needs
 from a pixel-compressed copy of the tables (:class:`PixelTables`), built once per pixel set and cached on the
 tables object.
+
+References
+----------
+-   Dobashi, Y., Iwasaki, W., Ono, A., Yamamoto, T., Yue, Y., & Nishita, T. (2012). An inverse problem approach
+    for automatically adjusting the parameters for rendering clouds using photographs. ACM Transactions on
+    Graphics, 31(6).
 """
 from __future__ import annotations
 
@@ -20,6 +34,8 @@ import numpy as np
 
 from natscene.errors import InputError
 from natscene.scatter.params import population
+
+__all__ = ["compose_cloud", "apply_atmosphere", "compose"]
 
 
 

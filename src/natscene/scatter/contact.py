@@ -1,9 +1,21 @@
-"""Contact sheet of the precomputed tables (Dobashi 2012 §4.3) for a person to look at.
+"""
+Contact sheet of the tables
+===========================
+
+Defines the contact sheet of the precomputed tables (Dobashi et al. 2012, §4.3) for a person to look at:
+
+-   :func:`contact_sheet`: the sheet as one uint8 image.
 
 Rows: S_sun, S_amb, T at three extinction nodes; then, for ``transport: dobashi``, one row per order k of
 E_m^(k) at the middle node for three g values, and for ``all_orders`` one row of the sun's multiple scattering
 (every order >= 2 at beta = 0.99) and one of the skylight (the dome's R, G, B at beta = 0.99, in colour). Every tile is tone-mapped on its own (auto exposure, :func:`natscene.io.to_srgb8`) and
 labelled, so the tile shows the pattern, not the absolute level.
+
+References
+----------
+-   Dobashi, Y., Iwasaki, W., Ono, A., Yamamoto, T., Yue, Y., & Nishita, T. (2012). An inverse problem approach
+    for automatically adjusting the parameters for rendering clouds using photographs. ACM Transactions on
+    Graphics, 31(6).
 """
 from __future__ import annotations
 
@@ -12,6 +24,8 @@ import numpy as np
 from natscene.io import to_srgb8
 from natscene.preview import label
 from natscene.scatter.transport import of
+
+__all__ = ["contact_sheet"]
 
 
 def _nearest(grid, x) -> int:

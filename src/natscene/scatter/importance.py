@@ -1,8 +1,15 @@
-"""Weight windows for the all-orders photon tracing: send the photons where the camera looks.
+"""
+Weight windows
+==============
+
+Defines the weight windows of the all-orders photon tracing, which send the photons where the camera looks
+(after Cooper & Larsen 2001 and Wagner & Haghighat 1998):
+
+-   :func:`window_targets`: the weight window's centre T per cell.
 
 A photon's tallies count only where the camera sees the cloud (the camera transmittance w weights every tally,
-:mod:`.photons`), but most of a thick cloud is hidden behind its first optical depths: on the main job's
-cumulus 3-6 % of the tally samples of an unguided photon land where w > 0.1, and the cloud's shadow side,
+:mod:`.photons`), but most of a thick cloud is hidden behind its first optical depths: few of the tally samples
+of an unguided photon land where the camera sees the cloud (docs/stages/precompute.md), and the cloud's shadow side,
 which the sun's photons reach only after diffusing through it, gets few of them. Splitting and Russian roulette
 against a weight window (the variance reduction of neutron transport codes; the windows follow the forward
 flux where the camera sees, after Cooper & Larsen 2001, and are raised behind the visible skin, the role of the
@@ -27,10 +34,19 @@ Where the camera sees, the photons' weights follow φ, so their density there is
 gets as many tally samples as the lit side (the photons split as they reach it). Behind the skin the window is
 1/floor times higher: photons are rouletted there, and the survivors carry the weight that the ones killed
 would have carried. Splitting and roulette keep every expected tally, so the window only moves the noise.
+
+References
+----------
+-   Cooper, M. A., & Larsen, E. W. (2001). Automated weight windows for global Monte Carlo particle transport
+    calculations. Nuclear Science and Engineering, 137(1), 1–13.
+-   Wagner, J. C., & Haghighat, A. (1998). Automated variance reduction of Monte Carlo shielding calculations
+    using the discrete ordinates adjoint function. Nuclear Science and Engineering, 128(2), 186–208.
 """
 from __future__ import annotations
 
 import numpy as np
+
+__all__ = ["window_targets"]
 
 
 def window_targets(flux: np.ndarray, first: np.ndarray, visibility: np.ndarray, occupied: np.ndarray,

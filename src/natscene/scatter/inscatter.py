@@ -1,4 +1,16 @@
-"""The in-scatter cache: from photon tallies to the light each pixel sees (all-orders transport).
+"""
+In-scatter cache
+================
+
+Defines the in-scatter cache of the all-orders transport, from photon tallies to the light each pixel sees
+(Dobashi et al. 2012, Eq. 5 with the cache's in-scattered radiance in place of the sun term):
+
+-   :func:`voxel_camera_depth`, :func:`depth_texture`: the optical depth D_cam from every voxel to the camera.
+-   :func:`visibility`: the camera transmittance w(x) at texture coordinates.
+-   :func:`weighted_voxel_integrals`: the exact ∫ rho w dV per voxel (Gauss-Legendre).
+-   :func:`block_sum`: sums over cells of voxels.
+-   :func:`cache_fields`: the cache's numerators and denominators.
+-   :func:`gather`: the view march of the cache fields, E_b(q).
 
 A tally C_b(cell) of :mod:`.photons` estimates ∫_cell w(x) sigma_t(x) S_b(x) dV, S_b the in-scattered radiance
 toward the camera of the orders of band b and w(x) = exp(-sigma_t k D̃(x)) the camera transmittance
@@ -8,9 +20,9 @@ estimator
     S_b(cell) = C_b(cell) / Q(cell),    Q(cell) = ∫_cell w sigma_t dV,
 
 gives the mean of S_b over the cell weighted by w sigma_t, the weighting of a view ray's integrand (Eq. 5:
-T_cam sigma_t S). Unweighted, a cell several mean free paths deep averaged S over its whole depth while the
-camera sees only its first mean free path; near the lit surface S changes over that distance, and the thick
-clouds' high orders came out up to 10 % (mean) and 48 % (8x8 blocks) too bright against Mitsuba. Any positive
+T_cam sigma_t S). Unweighted, a cell several mean free paths deep would average S over its whole depth while
+the camera sees only its first mean free path; near the lit surface S changes over that distance, and the thick
+clouds' high orders would come out too bright against Mitsuba (docs/stages/precompute.md). Any positive
 weight gives a consistent weighted mean as long as the tallies and Q use the same one, so Q must be exact:
 :func:`weighted_voxel_integrals` integrates the trilinear density times w per voxel by Gauss-Legendre nodes
 inside each trilinear patch.
@@ -23,6 +35,12 @@ exactly for a density constant over it, as :mod:`.single`:
     E_b(q) = Σ_segments T_prev (1 - exp(-sigma_t k rho_i h)) S_b(x_i),
 
 and stops where the view transmittance falls below 1e-4.
+
+References
+----------
+-   Dobashi, Y., Iwasaki, W., Ono, A., Yamamoto, T., Yue, Y., & Nishita, T. (2012). An inverse problem approach
+    for automatically adjusting the parameters for rendering clouds using photographs. ACM Transactions on
+    Graphics, 31(6).
 """
 from __future__ import annotations
 
@@ -35,6 +53,9 @@ import mitsuba as mi
 from natscene.scatter.medium import ray_box_dr
 from natscene.scatter.rays import camera_rays, pixel_mean
 from natscene.scatter.single import one_minus_exp
+
+__all__ = ["voxel_camera_depth", "depth_texture", "visibility", "weighted_voxel_integrals", "block_sum",
+           "cache_fields", "gather"]
 
 
 def voxel_camera_depth(med, camera_position, step_voxels: float = 1.0) -> np.ndarray:

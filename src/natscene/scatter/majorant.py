@@ -1,4 +1,11 @@
-"""Free-flight sampling through a grid of local majorants (delta tracking with a DDA traversal).
+"""
+Local majorants
+===============
+
+Defines free-flight sampling through a grid of local majorants (delta tracking with a DDA traversal):
+
+-   :class:`MajorantGrid`, :func:`majorant_grid`: the per-cell density majorants of a volume.
+-   :func:`flight_event`: one event of delta tracking (a tentative collision or a cell crossed).
 
 Delta (Woodcock) tracking samples a free flight in a heterogeneous medium mu_t(x) = sigma_t k rho(x) by
 tentative collisions at the rate of a majorant mu_bar >= mu_t, each accepted with probability
@@ -11,6 +18,15 @@ exponential optical depth is consumed at the cell's rate. Empty space is skipped
 nearest occupied cell is d cells away (chessboard distance), the ray jumps (d - 1) cell widths at once and
 the DDA restarts there. Unbiased: every tentative collision is accepted with mu_t / mu_bar_cell <= 1, and
 nothing can collide in empty cells.
+
+References
+----------
+-   Amanatides, J., & Woo, A. (1987). A fast voxel traversal algorithm for ray tracing. Eurographics '87, 3–10.
+-   Novák, J., Georgiev, I., Hanika, J., & Jarosz, W. (2018). Monte Carlo methods for volumetric light transport
+    simulation. Computer Graphics Forum, 37(2).
+-   Woodcock, E., Murphy, T., Hemmings, P., & Longworth, S. (1965). Techniques used in the GEM code for Monte Carlo
+    neutronics calculations in reactors and other systems of complex geometry. Proceedings of the Conference on
+    Applications of Computing Methods to Reactor Problems, Argonne National Laboratory.
 """
 from __future__ import annotations
 
@@ -21,6 +37,8 @@ import numpy as np
 import natscene.variant  # noqa: F401  (sets DRJIT_LIBLLVM_PATH before drjit loads)
 import drjit as dr
 import mitsuba as mi
+
+__all__ = ["MajorantGrid", "majorant_grid", "flight_event"]
 
 
 

@@ -1,4 +1,12 @@
-"""The cloud medium on the Dr.Jit side (Dobashi 2012 §4.3; DESIGN §3 "The cloud rendering model").
+"""
+Cloud medium
+============
+
+Defines the cloud medium on the Dr.Jit side (Dobashi et al. 2012, §4.3; DESIGN §3 "The cloud rendering model"):
+
+-   :class:`Medium`, :func:`make_medium`: the density texture and the sun optical-depth volume of one volume.
+-   :func:`ray_box_dr`: the slab test on Dr.Jit arrays.
+-   :func:`active_mitsuba`: the mitsuba module with a variant active.
 
 A :class:`Medium` holds the density rho(x) of a :class:`natscene.volume.grid.Volume` as a trilinear
 ``mi.Texture3f`` (the same cell-centred lookup Mitsuba's ``gridvolume`` uses, so the reference renders see
@@ -7,6 +15,12 @@ D(x) = ∫_0^∞ rho(x + s·l) ds (l: unit vector toward the sun), marched once 
 resolution. Because mu_t = sigma_t · rho · extinction_scale, the transmittance toward the sun for every
 sigma_t is then tau(x_l, x, sigma_t) = exp(-sigma_t · extinction_scale · D(x)) — one volume serves the whole
 sigma_t grid, the single-scattering march (Eq. 5) and the next-event estimation of the path tracer (Eq. 7).
+
+References
+----------
+-   Dobashi, Y., Iwasaki, W., Ono, A., Yamamoto, T., Yue, Y., & Nishita, T. (2012). An inverse problem approach
+    for automatically adjusting the parameters for rendering clouds using photographs. ACM Transactions on
+    Graphics, 31(6).
 """
 from __future__ import annotations
 
@@ -19,6 +33,8 @@ import drjit as dr
 import mitsuba as mi
 
 from natscene.variant import select_variant
+
+__all__ = ["active_mitsuba", "Medium", "ray_box_dr", "make_medium"]
 
 
 def active_mitsuba():

@@ -1,4 +1,12 @@
-"""An independent Mitsuba 3 ``volpath`` scene of the same cloud, camera and sun (the reference of the tests).
+"""
+Mitsuba reference scene
+=======================
+
+Defines an independent Mitsuba 3 ``volpath`` scene of the same cloud, camera and sun (the reference of the tests):
+
+-   :func:`scene_dict`: the ``mi.load_dict`` description of the scene.
+-   :func:`render_reference`: the ``volpath`` image with scattering orders 1..n.
+-   :func:`render_transmittance`: the ``volpath`` view transmittance T.
 
 The volume becomes a ``heterogeneous`` medium (``gridvolume`` from an in-memory ``mi.TensorXf``, unit cube
 mapped to the bbox, ``scale`` = sigma_t · extinction_scale, constant albedo beta, ``hg`` phase) inside a
@@ -6,6 +14,10 @@ mapped to the bbox, ``scale`` = sigma_t · extinction_scale, constant albedo bet
 along -sun_dir; the camera a ``perspective`` sensor (vertical fov) with a ``box``-filtered ``hdrfilm``.
 ``volpath``'s ``max_depth = n + 1`` keeps scattering orders 1..n (DESIGN §3, Mitsuba facts).
 Optionally a ``constant`` environment (radiance 1) with ``max_depth = 1`` renders the view transmittance T.
+
+References
+----------
+-   Jakob, W., et al. (2022). Mitsuba 3 renderer. https://mitsuba-renderer.org
 """
 from __future__ import annotations
 
@@ -15,6 +27,9 @@ import natscene.variant  # noqa: F401
 import mitsuba as mi
 
 from natscene.scatter.medium import _mi
+
+# ``mi`` (the mitsuba module) is listed because tools/thick_references.py imports it from here.
+__all__ = ["scene_dict", "render_reference", "render_transmittance", "mi"]
 
 
 def scene_dict(volume, camera, sun_dir, sigma_t: float, g: float, beta: float, irradiance=(1.0, 1.0, 1.0),

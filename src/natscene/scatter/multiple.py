@@ -1,4 +1,11 @@
-"""Multiple scattering by Monte Carlo path tracing, one tally per order (Dobashi 2012 Eqs. 6–8).
+"""
+Per-order path tracing
+======================
+
+Defines the multiple scattering of the ``dobashi`` transport by Monte Carlo path tracing, one tally per order
+(Dobashi et al. 2012, §4.3, Eqs. 6–8):
+
+-   :func:`trace_orders`: the per-order estimates E^(k)(q, g, sigma) for k = 1..n_max, every g from the same paths.
 
 Paths start at the camera (uniform sub-pixel jitter, box filter) and are built by delta tracking through
 mu_t = sigma_t k rho (k = extinction_scale, one global majorant sigma_t k max rho). Free flights sampled
@@ -19,14 +26,14 @@ Options, all unbiased (tests compare them with plain sampling): ``pixels`` trace
 (the precompute passes those whose view rays meet density: the others are exactly 0); ``split`` continues
 every camera path from its first vertex as ``split`` secondary paths of weight 1/split (the standard error
 is then taken over camera paths); ``guide`` draws that fraction of the directions from an HG(``g_guide``)
-lobe around the direction toward the sun, weights with the whole mixture pdf. Where the variance is
-(measured on the 194x122x194 cumulus, kite view, 320x240, 16 spp): per-sample coefficient of variation
-≈ 1.6 / 2.1 / 2.4 for orders 2 / 3 / 4 at every sigma_t in 0.1..1 (this cloud is optically thick even at
-0.1); split 4 at 4 camera paths gives the same error as 16 camera paths (the first vertex's position
-carries almost none of it, the first flight ≈ 15 % of the cost), guide 0.3 / g 0.8 lowers it by ≈ 8 % at
-≈ 1.3x the cost: both off by default. What remains is the escape-or-collide outcome of each later segment
-and where the next vertex lands relative to the lit surface; a per-pixel relative error of 5 % for
-order 4 needs ≈ 2,300 camera paths per pixel (~9x the default 256).
+lobe around the direction toward the sun, weights with the whole mixture pdf. ``split`` and ``guide`` are off
+by default.
+
+References
+----------
+-   Dobashi, Y., Iwasaki, W., Ono, A., Yamamoto, T., Yue, Y., & Nishita, T. (2012). An inverse problem approach
+    for automatically adjusting the parameters for rendering clouds using photographs. ACM Transactions on
+    Graphics, 31(6).
 """
 from __future__ import annotations
 
@@ -41,6 +48,8 @@ import mitsuba as mi
 from natscene.scatter.medium import Medium, ray_box_dr
 from natscene.scatter.phase import hg_dr, hg_sample_cos_dr
 from natscene.scatter.rays import camera_rays
+
+__all__ = ["trace_orders"]
 
 
 @dr.syntax

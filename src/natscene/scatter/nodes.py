@@ -1,5 +1,20 @@
-"""Interpolation on the precompute tables' node grids (the extinction's, g's): linear between the two nodes that
-bracket a value, the value clamped to the grid's ends (Dobashi 2012 §4.3 interpolates the tables the same way)."""
+"""
+Interpolation on the table nodes
+================================
+
+Defines the interpolation on the precompute tables' node grids (the extinction's, g's): linear between the two
+nodes that bracket a value, the value clamped to the grid's ends (Dobashi et al. 2012, §4.3 interpolates the
+tables the same way):
+
+-   :func:`lerp_weights`: the (P, N) interpolation weights of P values on a grid of N nodes.
+-   :func:`bracket`, :func:`brackets`: the lower node and the fraction of one value, or of an array of values.
+
+References
+----------
+-   Dobashi, Y., Iwasaki, W., Ono, A., Yamamoto, T., Yue, Y., & Nishita, T. (2012). An inverse problem approach
+    for automatically adjusting the parameters for rendering clouds using photographs. ACM Transactions on
+    Graphics, 31(6).
+"""
 from __future__ import annotations
 
 import numpy as np

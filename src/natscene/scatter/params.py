@@ -1,9 +1,23 @@
-"""The parameter sets of the cloud model (Dobashi 2012 Table 1): one set, or a GA population of P sets, as the
-compositions and the renderer read them.
+"""
+Parameter sets of the cloud model
+=================================
+
+Defines the parameter sets of the cloud model (Dobashi et al. 2012, Table 1): one set, or a GA population of
+P sets, as the compositions and the renderer read them:
+
+-   :data:`PARAM_KEYS`: the keys of a set.
+-   :func:`population`: a parameter dict broadcast to a population of P sets.
+-   :func:`rgb_per_individual`: one per-channel parameter as (P, 3).
 
 A set holds c_in (sunlight colour, 3), L_in (sun intensity), g (HG asymmetry), the extinction in 1/m (mu_t =
 extinction * rho), beta (albedo), L_amb (the ``dobashi`` transport's ambient intensity) and kappa_a (the
 atmosphere's extinction per channel, 3); the all-orders transport adds ``sky_scale`` and ``ground_albedo`` (3).
+
+References
+----------
+-   Dobashi, Y., Iwasaki, W., Ono, A., Yamamoto, T., Yue, Y., & Nishita, T. (2012). An inverse problem approach
+    for automatically adjusting the parameters for rendering clouds using photographs. ACM Transactions on
+    Graphics, 31(6).
 """
 from __future__ import annotations
 

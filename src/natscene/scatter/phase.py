@@ -1,5 +1,12 @@
-"""The Henyey–Greenstein phase function of the cloud transport: :mod:`natscene.phase` (its one home), under the
-names the scatter package has always imported from here."""
+"""
+Phase function of the cloud transport
+=====================================
+
+Re-exports the Henyey–Greenstein phase function of :mod:`natscene.phase` (its one home) under the names the
+scatter package imports from here:
+
+-   :data:`INV_4PI`, :func:`hg`, :func:`hg_dr`, :func:`hg_sample_cos_dr`: see :mod:`natscene.phase`.
+"""
 from natscene.phase import INV_4PI, hg, hg_dr, hg_sample_cos_dr
 
 __all__ = ["INV_4PI", "hg", "hg_dr", "hg_sample_cos_dr"]

@@ -1,4 +1,13 @@
-"""Photon tracing for the all-orders transport: every scattering order of the sun's and the sky's light.
+"""
+Photon tracing
+==============
+
+Defines the photon tracing of the all-orders transport, every scattering order of the sun's and the sky's light
+(tallied toward the camera for Dobashi et al. 2012, Eq. 5's view integral):
+
+-   :class:`SunBeam`: parallel sunlight of unit irradiance.
+-   :class:`SkySource`: the light of a sky dome in four channels (R, G, B and the ground).
+-   :func:`trace`: trace photons through the medium and tally the in-scatter caches (:class:`InscatterTally`).
 
 Photons enter the cloud as a parallel beam from the sun (:class:`SunBeam`) or from a direction of the sky
 dome (:class:`SkySource`), travel by delta tracking through mu_t = sigma_t k rho (:mod:`.majorant`) and
@@ -18,6 +27,10 @@ tracking (Spanier & Gelbard 1969; the volume photon map of Jensen & Christensen 
 shared by every pixel that looks at the cell; ``tally_rate`` keeps a floor of tentative collisions per voxel
 length in thin cloud, where real collisions are rare.
 
+From order ``similarity_order`` on (32 by default) a photon flies in the similar medium of high-order similarity,
+sigma_t (1 - g) and isotropic, each collision standing for a geometric number of real ones (:func:`_walk`): the
+long walks of a thick cloud cost (1 - g) of their collisions.
+
 The sun's first flight (order 1) is not tallied: single scattering is ray-marched exactly (Eq. 5). The sky's
 photons are tallied from their first flight. A histogram of the light per exact order (whole cloud, weighted by
 w, collision estimator at the real collisions) gives each band's order distribution (:func:`natscene.scatter.bands.fit_ratios`).
@@ -31,13 +44,26 @@ the flights that carry the tally's forward peak are sampled often and lightly.
 The walks run in one symbolic loop of events (:func:`_walk`): each iteration moves every lane's photon by one
 event of delta tracking (a tentative collision or a majorant cell crossed), and a lane whose photon dies takes
 the next one. Split copies are written out and walked in a second pass, and so on. A loop over whole flights
-(or whole walks) keeps a SIMD packet busy until its longest flight ends: on the main job's cumulus such a loop
-used 22 % of its lanes, this one about 70 %.
+(or whole walks) keeps a SIMD packet busy until its longest flight ends, with most of its lanes idle; the loop
+of events keeps most of them busy (docs/stages/precompute.md).
 
 The tallies are sums of many small terms added by parallel threads in no fixed order; floating-point
 atomics would make every run's last bits differ. They are therefore accumulated in 64-bit fixed point
 (``FIXED`` units per unit of photon power: integer addition is associative), so the same seed and settings
 give the same bytes on any thread count.
+
+References
+----------
+-   Dobashi, Y., Iwasaki, W., Ono, A., Yamamoto, T., Yue, Y., & Nishita, T. (2012). An inverse problem approach
+    for automatically adjusting the parameters for rendering clouds using photographs. ACM Transactions on
+    Graphics, 31(6).
+-   Jensen, H. W., & Christensen, P. H. (1998). Efficient simulation of light transport in scenes with
+    participating media using photon maps. Proceedings of ACM SIGGRAPH 1998, 311–320.
+-   Spanier, J., & Gelbard, E. M. (1969). Monte Carlo Principles and Neutron Transport Problems. Addison-Wesley.
+-   Wyman, D. R., Patterson, M. S., & Wilson, B. C. (1989). Similarity relations for anisotropic scattering in
+    Monte Carlo simulations of deeply penetrating neutral particles. Journal of Computational Physics, 81(1).
+-   Zhao, S., Ramamoorthi, R., & Bala, K. (2014). High-order similarity relations in radiative transfer. ACM
+    Transactions on Graphics, 33(4), 104.
 """
 from __future__ import annotations
 
@@ -54,6 +80,8 @@ from natscene.scatter.bands import band_table
 from natscene.scatter.majorant import MajorantGrid, flight_event
 from natscene.scatter.medium import ray_box_dr
 from natscene.scatter.phase import hg_dr, hg_sample_cos_dr
+
+__all__ = ["SunBeam", "SkySource", "InscatterTally", "trace"]
 
 
 FIXED = float(2 ** 32)      # fixed-point units per unit of (tally value / photon power)
@@ -318,6 +346,7 @@ class _Walk:
     phase: bool
     window: object
     split_max: int
+    similarity: object    # None, or (first order, 1 - g, log g): high-order similarity (:func:`_walk`)
 
 
 @dr.syntax
@@ -338,7 +367,15 @@ def _walk(s: _Walk, rec_p, rec_w, rec_wts, rec_mult, rec_k, rec_vis, rec_state, 
     when m < T / 2, and splits into n = min(floor(m / T), ``split_max``) copies of weight m / n when m > 2T; the
     lane walks the first copy on and writes one record for the other n - 1 into its ``cap`` slots of ``spawn``
     (a lane whose slots are full does not split: splitting is optional, every choice keeps the expected tallies).
-    Returns the lanes' spawn counts and real collisions."""
+    Returns the lanes' spawn counts and real collisions.
+
+    High orders by similarity (``s.similarity``, Zhao, Ramamoorthi & Bala 2014, first order; Wyman et al. 1989):
+    a flight that starts at order k >= ``similarity_order`` runs in the similar medium sigma_t* = sigma_t (1 - g),
+    g* = 0, which has the same transport mean free path (the same diffusion); each of its collisions stands for
+    K ~ Geometric(1 - g) real ones (k += K: E[beta^K] = beta (1 - g) / (1 - beta g) is the similar albedo, so the
+    closed-form albedo of the bands holds), and its tallies count the real mu_t = mu_t* / (1 - g) with the real
+    phase function toward the camera along the flight's direction (the similar field keeps the fluence and the
+    flux). A walk of n real collisions then costs about n (1 - g) events."""
     nch = len(rec_wts)
     lane = dr.arange(mi.UInt32, lanes)
     rec = mi.UInt32(lane)
@@ -367,10 +404,18 @@ def _walk(s: _Walk, rec_p, rec_w, rec_wts, rec_mult, rec_k, rec_vis, rec_state, 
     tmz = mi.Float(0.0)
     spawned = mi.UInt32(0)
     collided = mi.UInt32(0)
+    red = mi.Bool(False)                    # the flight is in the similar medium (sigma_t (1 - g), g = 0)
     while dr.hint(active, include=[rng]):
         # a new flight: after a collision (k > 0) the photon scatters first
         turn = start & (k > 0)
-        w_new, f = _new_direction(s.lobe_on, w, p, s.g, rng, s.lobe_share, s.cam, vis_p)
+        g_l, sig_l, boost = s.g, s.sig_k, mi.Float(1.0)
+        if s.similarity is not None:
+            first, one_minus_g, _ = s.similarity
+            red = dr.select(start, k >= first, red)
+            g_l = dr.select(red, 0.0, s.g)
+            sig_l = dr.select(red, s.sig_k * one_minus_g, s.sig_k)
+            boost = dr.select(red, 1.0 / one_minus_g, 1.0)
+        w_new, f = _new_direction(s.lobe_on, w, p, g_l, rng, s.lobe_share, s.cam, vis_p)
         w = dr.select(turn, w_new, w)
         f = dr.select(turn, f, 1.0)
         wts = [x * f for x in wts]
@@ -385,11 +430,13 @@ def _walk(s: _Walk, rec_p, rec_w, rec_wts, rec_mult, rec_k, rec_vis, rec_state, 
         kk = dr.minimum(k + 1, s.max_order)
         rate = dr.select(k + 1 >= s.k_min, s.floor, 0.0)
         t, tau, cells, x, ratio, inside, accept, escaped = flight_event(
-            s.med, s.grid, p, w, s.sig_k, rng, flying, start & flying, t, t1, tau, (ix, iy, iz, tmx, tmy, tmz), rate)
+            s.med, s.grid, p, w, sig_l, rng, flying, start & flying, t, t1, tau, (ix, iy, iz, tmx, tmy, tmz), rate)
         ix, iy, iz, tmx, tmy, tmz = cells
         vis_x = _visibility(s.vis, x, s.lo, s.ext)
         light = vis_x * hg_dr(dr.dot(w, dr.normalize(s.cam - x)), s.g)
-        val = ratio * (light if s.phase else vis_x)
+        if s.similarity is not None:  # a similar flight: the real mu_t is boost x the similar one
+            light = light * boost
+        val = ratio * (light if s.phase else vis_x * boost)
         for ci, (factor, dims, ncell) in enumerate(s.caches):
             slot = dr.gather(mi.Int32, s.slot_tabs[ci], kk)
             idx = mi.UInt32(dr.maximum(slot, 0)) * ncell + _cache_index(x, s.lo, s.ext, s.res, factor, dims)
@@ -399,7 +446,12 @@ def _walk(s: _Walk, rec_p, rec_w, rec_wts, rec_mult, rec_k, rec_vis, rec_state, 
         # a real collision: order k, the histogram, the end of the walk at max_order, the weight window
         p = dr.select(accept, x, p)
         vis_p = dr.select(accept, vis_x, vis_p)
-        k = dr.select(accept, k + 1, k)
+        step = mi.UInt32(1)
+        if s.similarity is not None:  # a similar collision stands for K real ones, P(K = n) = (1 - g) g^(n - 1)
+            log_g = s.similarity[2]
+            extra = dr.floor(dr.log(1.0 - rng.next_float32()) / log_g)
+            step = dr.select(red, mi.UInt32(dr.minimum(extra, float(s.max_order))) + 1, 1)
+        k = dr.select(accept, k + step, k)
         collided += dr.select(accept, 1, 0)
         power = mi.Float(0.0)
         for c in range(nch):
@@ -483,7 +535,7 @@ def _copies(spawn: dict, spawned, lanes: int, cap: int, seed: int, stream: int):
 def trace(med, grid: MajorantGrid, source, sigma: float, g: float, camera_position, n_photons: int, bands,
           caches=((2, None),), seed: int = 0, max_order: int = 4096, k_min: int = 2, batch: int = 2 ** 18,
           progress=None, camera_depth=None, tally_rate: float = 0.0, phase: bool = True,
-          window=None, split_max: int = 8, camera_lobe: float = 0.0) -> InscatterTally:
+          window=None, split_max: int = 8, camera_lobe: float = 0.0, similarity_order: int = 0) -> InscatterTally:
     """Trace ``n_photons`` from ``source`` through the medium at (sigma, g) and tally the in-scatter caches.
 
     ``caches``: (factor, band indices or None = all bands) per cache; every band goes to exactly one cache.
@@ -496,6 +548,8 @@ def trace(med, grid: MajorantGrid, source, sigma: float, g: float, camera_positi
     pilot run, :func:`natscene.scatter.allorders.weight_window`).
     ``window``: (factor, (cx, cy, cz), targets Float) or None: splitting and Russian roulette at every collision
     against this weight window (:func:`_walk`, :mod:`natscene.scatter.importance`).
+    ``similarity_order`` > 0 (and g > 0.05): from that order on the photon flies in the similar medium of
+    high-order similarity (:func:`_walk`).
 
     The source's photons are walked by :func:`_walk` in one pass per ``batch`` photons; the copies that pass
     splits off are walked in the next, and so on until no copy is left (2^18 photons a batch keep a main-job node
@@ -539,7 +593,10 @@ def trace(med, grid: MajorantGrid, source, sigma: float, g: float, camera_positi
               [[dr.zeros(mi.UInt64, max(1, geo[ci][2] * len(band_sets[ci]))) for _ in range(nch)]
                for ci in range(len(caches))],
               dr.zeros(mi.UInt64, max_order + 1), dr.zeros(mi.UInt64, 1), int(max_order), int(k_min), bool(phase),
-              window, int(split_max))
+              window, int(split_max), None)
+    if similarity_order > 0 and g > 0.05:
+        s.similarity = (dr.opaque(mi.UInt32, int(similarity_order)), dr.opaque(mi.Float, 1.0 - float(g)),
+                        dr.opaque(mi.Float, math.log(float(g))))
     unit = None     # photon power that one fixed-point unit of FIXED stands for (the first batch's mean)
     collisions = 0
     done = 0

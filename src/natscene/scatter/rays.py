@@ -1,4 +1,12 @@
-"""Camera rays on the Dr.Jit side for the pinhole camera of :mod:`natscene.geometry` (DESIGN §3, Geometry).
+"""
+Camera rays
+===========
+
+Defines the camera rays on the Dr.Jit side for the pinhole camera of :mod:`natscene.geometry`
+(DESIGN §3, Geometry):
+
+-   :func:`camera_rays`: origins, directions and pixel indices of W*H*spp samples.
+-   :func:`pixel_mean`: the box-filtered average of each pixel's samples.
 
 Sample s of pixel (i, j) lives at flat index ``(i * W + j) * spp + s`` so that ``dr.block_sum(x, spp)``
 returns one value per pixel in row-major order. Sub-pixel positions are either a stratified grid
@@ -12,6 +20,8 @@ import numpy as np
 import natscene.variant  # noqa: F401
 import drjit as dr
 import mitsuba as mi
+
+__all__ = ["camera_rays", "pixel_mean"]
 
 
 def camera_rays(camera, spp: int, rng=None, stratified: bool = False, pixels=None):

@@ -1,4 +1,8 @@
-"""Reference scenes of the transport: the clouds, camera and sun of the stored Mitsuba ``volpath`` references.
+"""
+Reference scenes of the transport
+=================================
+
+Defines the clouds, camera and sun of the stored Mitsuba ``volpath`` references of the transport (listed below).
 
 The renders in ``tests/data/transport_volpath.npz`` (``tools/transport_references.py``) and
 ``tests/data/transport_volpath_thick.npz`` (``tools/thick_references.py``) are of these scenes; the tests compare
@@ -18,6 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
+from natscene.config import default_settings
 from natscene.geometry import Camera
 from natscene.scatter.allorders import AllOrdersSettings
 from natscene.volume.grid import Volume, placement
@@ -33,8 +38,8 @@ NOSKY = {"sky_scale": [0.0, 0.0, 0.0], "ground_albedo": 0.0}
 K = 80.0
 #: the all-orders settings of the volpath comparisons: cache cells of one voxel, 0.33 to 1.7 mean free paths of
 #: the blob at sigma_t 0.2 to 1
-SETTINGS = AllOrdersSettings(sun_collisions=12_000_000, sky_collisions=200_000, fine_voxels=1, coarse_voxels=1,
-                             camera_lobe=0.6)
+SETTINGS = default_settings(AllOrdersSettings, sun_collisions=12_000_000, sky_collisions=200_000, fine_voxels=1,
+                            coarse_voxels=1, camera_lobe=0.6)
 
 
 def blob_volume(scale: float = K, n: tuple = (48, 32, 48)) -> Volume:

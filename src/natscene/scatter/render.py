@@ -1,5 +1,11 @@
-"""The forward renderer: the cloud model evaluated directly, without tables, at any view, sun and resolution
-(the keyframe frames), with the same transport as the precompute.
+"""
+Forward renderer
+================
+
+Defines the forward renderer: the cloud model of Dobashi et al. (2012, Eqs. 3–5, 9) evaluated directly, without
+tables, at any view, sun and resolution (the keyframe frames), with the same transport as the precompute:
+
+-   :func:`render`: L_cg (H, W, 3) for one parameter set.
 
 Common to every transport: the sun optical-depth volume for this sun (:mod:`natscene.scatter.medium`) and the
 ray-marched S_sun, S_amb, T at the given extinction in 1/m (``params["extinction"]``, mu_t = e rho; the tracers
@@ -7,6 +13,12 @@ take the volume's unitless sigma_t = e / ``extinction_scale``) (:mod:`natscene.s
 (:mod:`natscene.scatter.transport`, ``transport=``) gives the cloud's own light (its ``render``: single and
 multiple scattering, and for ``all_orders`` the skylight of the frame's dome), then Eq. 4 adds the sky seen
 through the cloud, L_b = T L_sky, and Eq. 3 the atmosphere.
+
+References
+----------
+-   Dobashi, Y., Iwasaki, W., Ono, A., Yamamoto, T., Yue, Y., & Nishita, T. (2012). An inverse problem approach
+    for automatically adjusting the parameters for rendering clouds using photographs. ACM Transactions on
+    Graphics, 31(6).
 """
 from __future__ import annotations
 
@@ -17,26 +29,25 @@ from natscene.scatter.params import population
 from natscene.scatter.skylight import DEFAULT_GROUND_ALBEDO
 from natscene.scatter.transport.base import RenderOptions
 
+__all__ = ["render"]
+
 
 def render(volume, camera, sun_dir, params: dict, sky, orders: int = 4, spp: int = 64, seed: int = 0,
            step_voxels: float = 0.5, supersample: int = 4, rho_threshold: float = 0.01,
            batch_spp: int | None = None, return_components: bool = False, transport: str = "all_orders",
-           sky_settings: dict | None = None, dome=None, ground_albedo=DEFAULT_GROUND_ALBEDO,
-           sun_collisions: int | None = None, sky_collisions: int | None = None, skylight: bool = True,
-           all_orders=None, tally_rate: float | None = None, ground_share: float | None = None,
-           camera_lobe: float = 0.0):
+           sky_settings=None, dome=None, ground_albedo=DEFAULT_GROUND_ALBEDO, skylight: bool = True,
+           all_orders=None):
     """L_cg (H, W, 3) for one parameter set (scalars; c_in and kappa_a (3,)).
 
     ``sky``: (H, W, 3) linear L_sky at the camera's resolution (or a constant (3,) colour).
     ``return_components``: also return a dict with L_s, L_m, L_b, T, t_c, footprint (all_orders: L_m holds
     every order >= 2 of the sun's light and L_sky_lit the skylight's). ``skylight=False``: the sun alone
-    lights the cloud (all_orders; e.g. to compare with a sun-only reference). ``all_orders``: an
-    :class:`natscene.scatter.allorders.AllOrdersSettings` to start from (cache cells, tally rate...); the
-    step, supersampling, collision, ``tally_rate`` and ``ground_share`` (the share of the sky photons that
-    come from the ground) arguments override it, and so does ``camera_lobe``: the frames leave the angle biasing
-    toward the camera off (on the main job's day frame it cut the noise figure by 13 % for about 20 % more time;
-    docs/stages/precompute.md). The photon counts follow the collision budgets, at most one photon per two
-    collisions (or the settings' caps, where higher).
+    lights the cloud (all_orders; e.g. to compare with a sun-only reference). ``all_orders``: the all-orders
+    transport's :class:`natscene.scatter.allorders.AllOrdersSettings`, used as they are (a shot's:
+    :func:`natscene.scatter.allorders.frame_settings` of its render section); None: the shots' defaults at this
+    ``step_voxels`` and ``supersample``. ``orders``, ``spp``, ``batch_spp``: the dobashi transport's settings.
+    ``sky_settings``: the shot's sky (a validated ``shots.<name>.sky`` or its
+    :class:`natscene.sky.daylight.Skylight`), whose dome lights the cloud (all_orders) unless ``dome`` is given.
     """
     from natscene.scatter.medium import make_medium
     from natscene.scatter.single import march_view
@@ -66,9 +77,7 @@ def render(volume, camera, sun_dir, params: dict, sky, orders: int = 4, spp: int
     t_c, cos_t, foot = geometry_images(camera, volume, med.sun_dir, single["t_hit"])
     options = RenderOptions(seed=seed, step_voxels=step_voxels, supersample=supersample, orders=orders, spp=spp,
                             batch_spp=batch_spp, sky_settings=sky_settings, dome=dome, ground_albedo=ground_albedo,
-                            sun_collisions=sun_collisions, sky_collisions=sky_collisions, skylight=skylight,
-                            all_orders=all_orders, tally_rate=tally_rate, ground_share=ground_share,
-                            camera_lobe=camera_lobe)
+                            skylight=skylight, all_orders=all_orders)
     cloud, comps = model.render(volume, med, camera, sigma, single, cos_t, p, sky, options)
     L_s, L_m = comps["L_s"], comps["L_m"]
     T = single["T"][0]

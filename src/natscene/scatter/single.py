@@ -1,4 +1,13 @@
-"""Ray-marched single scattering, ambient term and view transmittance (Dobashi 2012 Eqs. 5 and 9).
+"""
+Single scattering by ray marching
+=================================
+
+Defines the ray-marched single scattering, ambient term and view transmittance (Dobashi et al. 2012, §4.3,
+Eqs. 5 and 9):
+
+-   :func:`march_view`: S_sun, S_amb, T for every view ray and every sigma_t of a grid, the distance to the cloud
+    and the footprint.
+-   :func:`one_minus_exp`: 1 - exp(-x), accurate in float32 for small x.
 
 For every view ray and every sigma_t of a grid, in ONE march (mu_t = sigma_t · k · rho, k the volume's
 ``extinction_scale``; O(t) = ∫_0^t rho; D(x) the sun optical depth of :mod:`natscene.scatter.medium`):
@@ -13,6 +22,12 @@ a segment of length h and density rho_i contributes T_prev (1 - a) tau_sun to S_
 T_prev (1 - a) / (sigma_t k) to S_amb, a = exp(-sigma_t k rho_i h) (limit rho_i h at sigma_t = 0). Constant
 media are therefore integrated without discretisation error. Also returned: the distance to the cloud
 (first sample with rho >= ``rho_threshold``) and the footprint (the ray meets such a sample).
+
+References
+----------
+-   Dobashi, Y., Iwasaki, W., Ono, A., Yamamoto, T., Yue, Y., & Nishita, T. (2012). An inverse problem approach
+    for automatically adjusting the parameters for rendering clouds using photographs. ACM Transactions on
+    Graphics, 31(6).
 """
 from __future__ import annotations
 
@@ -24,6 +39,8 @@ import mitsuba as mi
 
 from natscene.scatter.medium import Medium, ray_box_dr
 from natscene.scatter.rays import camera_rays, pixel_mean
+
+__all__ = ["march_view", "one_minus_exp"]
 
 
 def one_minus_exp(x):

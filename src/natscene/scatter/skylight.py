@@ -1,4 +1,15 @@
-"""The sky dome that lights the cloud (the skylight Dobashi 2012 §3 leaves out and §7 names as a limit).
+"""
+Sky dome
+========
+
+Defines the sky dome that lights the cloud (the skylight Dobashi et al. 2012, §3 leaves out and §7 names as a
+limit):
+
+-   :class:`Dome`, :func:`cell_directions`: the dome's radiance table and its cells' directions.
+-   :func:`daylight_dome`: the Preetham sky of a sun direction; :func:`uniform_dome`: a uniform dome.
+-   :func:`irradiance`, :func:`ground_radiance`: the horizontal irradiance and the ground's radiance
+    (:data:`DEFAULT_GROUND_ALBEDO`).
+-   :func:`calibration`: the per-channel factors that give the dome the photo's mean sky radiance.
 
 The dome is a table of radiance over the upper hemisphere (cells uniform in cos(zenith) and azimuth, so all
 cells have the same solid angle 2π / (n_theta n_phi)) in linear RGB, plus a uniform lower hemisphere
@@ -13,12 +24,23 @@ aureole, the horizon) outside the frame; the analytic dome follows the sun and i
 fixes its level and colour: each channel is scaled so that the dome, seen through the view's camera, has
 the photo's mean L_sky (:func:`calibration`). The ground radiance is albedo / π times the horizontal
 irradiance of the sun and the sky (a Lambertian ground in the open).
+
+References
+----------
+-   Dobashi, Y., Iwasaki, W., Ono, A., Yamamoto, T., Yue, Y., & Nishita, T. (2012). An inverse problem approach
+    for automatically adjusting the parameters for rendering clouds using photographs. ACM Transactions on
+    Graphics, 31(6).
+-   Preetham, A. J., Shirley, P., & Smits, B. (1999). A practical analytic model for daylight. Proceedings of
+    ACM SIGGRAPH 1999, 91–100.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
 
 import numpy as np
+
+__all__ = ["DEFAULT_GROUND_ALBEDO", "Dome", "cell_directions", "daylight_dome", "uniform_dome", "irradiance",
+           "ground_radiance", "calibration"]
 
 DEFAULT_GROUND_ALBEDO = 0.2      # the Lambertian ground's albedo when none is given (fit.ground_albedo's default)
 
@@ -46,13 +68,14 @@ def cell_directions(n_theta: int, n_phi: int) -> np.ndarray:
                      s[:, None] * np.cos(phi)[None]], axis=-1)
 
 
-def daylight_dome(sun_dir, turbidity: float = 3.0, zenith_luminance: float = 0.3,
-                  reference_elevation: float = 35.0, ground=(0.0, 0.0, 0.0), n_theta: int = 32,
-                  n_phi: int = 64) -> Dome:
-    """The Preetham sky of ``sun_dir`` (scaled as the shots' sky) on a dome table."""
-    from natscene.sky.daylight import preetham_rgb
+def daylight_dome(sun_dir, sky, ground=(0.0, 0.0, 0.0), n_theta: int = 32, n_phi: int = 64) -> Dome:
+    """The Preetham sky of ``sun_dir`` on a dome table, with the turbidity and the scale (zenith_luminance,
+    reference_elevation) of ``sky``: a :class:`natscene.sky.daylight.Skylight` or a validated sky block
+    (:func:`natscene.sky.daylight.skylight`); the dome keeps the model's colour down to 0.5 deg of elevation."""
+    from natscene.sky.daylight import preetham_rgb, skylight
+    s = skylight(sky)
     d = cell_directions(n_theta, n_phi)
-    rgb = preetham_rgb(d.reshape(-1, 3), sun_dir, turbidity, zenith_luminance, reference_elevation,
+    rgb = preetham_rgb(d.reshape(-1, 3), sun_dir, s.turbidity, s.zenith_luminance, s.reference_elevation,
                        min_view_elevation=0.5).reshape(n_theta, n_phi, 3)
     return Dome(rgb.astype(np.float64), np.asarray(ground, np.float64).reshape(3))
 

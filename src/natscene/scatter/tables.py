@@ -1,5 +1,14 @@
-"""The precomputed intermediate images for one volume, camera and sun (Dobashi 2012 §4.3), for either
-transport model (``precompute.transport``).
+"""
+Precomputed tables
+==================
+
+Defines the precomputed intermediate images for one volume, camera and sun (Dobashi et al. 2012, §4.3, Eqs. 5–9),
+for either transport model (``precompute.transport``):
+
+-   :class:`Tables`, :func:`precompute`: all tables of one view; :data:`EXTINCTION_RANGE`, the physical range
+    of an extinction.
+-   :func:`save_tables`, :func:`load_tables`, :func:`table_files`: the tables on disk.
+-   :func:`geometry_images`, :func:`reference_distance`: t_c, cos θ_q and the footprint from the view march.
 
 For a grid of the extinction coefficient e in 1/m (mu_t(x) = e rho(x), rho the volume's density; default 0 and
 0.002 ... 0.3 /m, two decades from haze to a storm cloud's core, about log-spaced) and a g grid (default 0, 0.1,
@@ -31,6 +40,12 @@ On disk (``results/precompute/{volume}/{view}/``): ``single.exr`` (channels ``su
 divided by its maximum, the maxima in the header) or ``multiple.exr`` (``k<k>.g<g>.e<e>``, float32), and
 ``meta.yaml`` (grids, bands and ratios, the sky dome, sample counts, noise). No wall-clock time is written
 into any of them (timings go to the log): a rerun gives the same bytes.
+
+References
+----------
+-   Dobashi, Y., Iwasaki, W., Ono, A., Yamamoto, T., Yue, Y., & Nishita, T. (2012). An inverse problem approach
+    for automatically adjusting the parameters for rendering clouds using photographs. ACM Transactions on
+    Graphics, 31(6).
 """
 from __future__ import annotations
 
@@ -42,6 +57,9 @@ import numpy as np
 
 from natscene.errors import InputError
 from natscene.io import read_exr, read_yaml, write_exr, write_yaml
+
+__all__ = ["EXTINCTION_RANGE", "Tables", "precompute", "save_tables", "load_tables", "table_files",
+           "geometry_images", "reference_distance"]
 
 
 DEFAULT_EXTINCTIONS = (0.0, 0.002, 0.005, 0.01, 0.02, 0.04, 0.08, 0.15, 0.3)   # 1/m

@@ -1,4 +1,8 @@
-"""The sky: extracted from a cloud photograph (Dobashi et al. 2012 §4.1), or the analytic daylight sky.
+"""
+Sky
+===
+
+The sky: extracted from a cloud photograph (Dobashi et al. 2012, §4.1), or the analytic daylight sky.
 
 - :mod:`natscene.sky.segmentation`: cloud / sky / neither classification by chroma (Dobashi 2010 as
   summarised in §4.1), optional hand-painted mask, morphology, soft cloud alpha;
@@ -15,4 +19,20 @@
 
 The package imports none of its modules: ``natscene.sky.daylight`` (used by the cloud renderer) loads without
 the photo stage's image libraries.
+
+References
+----------
+-   Dobashi, Y., Shinzo, Y., & Yamamoto, T. (2010). Modeling of clouds from a single photograph. Computer
+    Graphics Forum, 29(7), 2083–2090.
+-   Dobashi, Y., Iwasaki, W., Ono, A., Yamamoto, T., Yue, Y., & Nishita, T. (2012). An inverse problem approach
+    for automatically adjusting the parameters for rendering clouds using photographs. ACM Transactions on
+    Graphics, 31(6).
+-   Otsu, N. (1979). A threshold selection method from gray-level histograms. IEEE Transactions on Systems, Man,
+    and Cybernetics, 9(1), 62–66.
+-   Pérez, P., Gangnet, M., & Blake, A. (2003). Poisson image editing. ACM Transactions on Graphics, 22(3),
+    313–318.
+-   Preetham, A. J., Shirley, P., & Smits, B. (1999). A practical analytic model for daylight. Proceedings of
+    ACM SIGGRAPH 1999, 91–100.
 """
+
+__all__: list[str] = []

@@ -1,4 +1,14 @@
-"""The Preetham, Shirley & Smits (1999) analytic daylight sky: "A practical analytic model for daylight".
+"""
+Daylight sky
+============
+
+Defines the analytic daylight sky of Preetham, Shirley & Smits (1999) and a shot's sky:
+
+-   :func:`zenith_Yxy`: the zenith luminance and chromaticity for a sun zenith angle.
+-   :func:`preetham_Yxy`: the absolute sky (Y, x, y) toward view directions.
+-   :func:`preetham_rgb`: the scaled sky in linear sRGB (:func:`sky_scale`: the scale).
+-   :func:`skylight`: a sky block of the config as a :class:`Skylight`.
+-   :func:`shot_sky_radiance`: a shot's sky (this model or a constant colour) toward any directions.
 
 The Perez et al. (1993) all-weather distribution
 
@@ -21,12 +31,23 @@ any directions: the one place that reads those settings, used for the sky behind
 (:func:`natscene.keyframes.sky.sky_image`) and the sky that lights a composite's set
 (:func:`natscene.composite.sky_dome.shot_sky`). The sky dome that lights the clouds in the transport
 (:mod:`natscene.scatter.skylight`) uses :func:`preetham_rgb` too.
+
+References
+----------
+-   Perez, R., Seals, R., & Michalsky, J. (1993). All-weather model for sky luminance distribution—preliminary
+    configuration and validation. Solar Energy, 50(3), 235–245.
+-   Preetham, A. J., Shirley, P., & Smits, B. (1999). A practical analytic model for daylight. Proceedings of
+    ACM SIGGRAPH 1999, 91–100.
 """
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 
 from natscene.color import xyz_to_linear_srgb
+
+__all__ = ["zenith_Yxy", "preetham_Yxy", "sky_scale", "preetham_rgb", "Skylight", "skylight", "shot_sky_radiance"]
 
 # Perez coefficients as linear functions of turbidity: rows A..E, columns (slope, intercept) (Preetham App. A.2)
 _COEF_Y = np.array([[0.1787, -1.4630], [-0.3554, 0.4275], [-0.0227, 5.3251], [0.1206, -2.5771],
@@ -62,7 +83,7 @@ def _coefs(turbidity):
     return [c[:, 0] * T + c[:, 1] for c in (_COEF_Y, _COEF_x, _COEF_y)]
 
 
-def preetham_Yxy(dirs, sun_dir, turbidity: float = 3.0, min_view_elevation: float = 1.0):
+def preetham_Yxy(dirs, sun_dir, turbidity: float, min_view_elevation: float):
     """Absolute Preetham sky (Y in kcd/m^2, x, y) for unit view directions ``dirs`` (..., 3), y up."""
     if not 1.7 <= turbidity <= 10.0:
         raise ValueError(f"turbidity {turbidity} outside the model's range [1.7, 10]")
@@ -93,9 +114,10 @@ def sky_scale(turbidity: float, zenith_luminance: float, reference_elevation: fl
     return float(zenith_luminance) / Yz
 
 
-def preetham_rgb(dirs, sun_dir, turbidity: float = 3.0, zenith_luminance: float = 0.3,
-                 reference_elevation: float = 35.0, min_view_elevation: float = 1.0) -> np.ndarray:
-    """Linear sRGB sky radiance (..., 3), float32, scaled by :func:`sky_scale`; negative values clipped."""
+def preetham_rgb(dirs, sun_dir, turbidity: float, zenith_luminance: float, reference_elevation: float,
+                 min_view_elevation: float) -> np.ndarray:
+    """Linear sRGB sky radiance (..., 3), float32, scaled by :func:`sky_scale`; negative values clipped (the
+    settings of a sky block: :class:`Skylight`)."""
     Y, x, y = preetham_Yxy(dirs, sun_dir, turbidity, min_view_elevation)
     Y = Y * sky_scale(turbidity, zenith_luminance, reference_elevation)
     X = x / y * Y
@@ -104,17 +126,46 @@ def preetham_rgb(dirs, sun_dir, turbidity: float = 3.0, zenith_luminance: float 
     return np.clip(rgb, 0.0, None).astype(np.float32)
 
 
-def shot_sky_radiance(settings: dict, dirs, sun_dir) -> np.ndarray:
+@dataclass(frozen=True)
+class Skylight:
+    """The settings of a sky block of the config, completed (:func:`skylight`): ``shots.<name>.sky`` (the sky
+    behind a shot's frames, the dome that lights their clouds and a composite's set) and ``precompute.skylight``
+    (the dome that lights the cloud in the precompute, which configures ``model`` and ``turbidity``). No field has
+    a default here: they are the shots' sky schema's, ``workflow/schemas/shots.schema.yaml``
+    (``tests/test_settings.py`` keeps ``precompute.skylight``'s equal to them)."""
+
+    model: str                   # preetham or constant
+    turbidity: float
+    zenith_luminance: float
+    reference_elevation: float
+    min_view_elevation: float
+    color: tuple                 # linear RGB of the constant model
+
+    SCHEMA = (("shots.schema.yaml", ("additionalProperties", "sky")),)
+
+
+def skylight(settings: dict | Skylight | None, key: str = "shots.<name>.sky") -> Skylight:
+    """The one place that reads a sky block: a validated ``shots.<name>.sky`` or ``precompute.skylight`` (or a
+    part of one, or None) as a :class:`Skylight`, each key it lacks the schema's default
+    (:func:`natscene.config.settings_from_section`); a :class:`Skylight` is returned as it is."""
+    if isinstance(settings, Skylight):
+        return settings
+    from natscene.config import settings_from_section
+    return settings_from_section(Skylight, settings, key)
+
+
+def shot_sky_radiance(settings: dict | Skylight, dirs, sun_dir) -> np.ndarray:
     """Linear sRGB radiance (..., 3), float32, of a shot's sky toward unit ``dirs`` (..., 3) for the sun toward
-    ``sun_dir``; ``settings``: a validated ``shots.<name>.sky`` (``model: preetham``: :func:`preetham_rgb` with its
-    turbidity, zenith_luminance, reference_elevation, min_view_elevation; ``model: constant``: ``color``)."""
-    model = settings.get("model", "preetham")
-    if model == "preetham":
-        return preetham_rgb(dirs, sun_dir, settings.get("turbidity", 3.0), settings.get("zenith_luminance", 0.3),
-                            settings.get("reference_elevation", 35.0), settings.get("min_view_elevation", 1.0))
-    if model == "constant":
-        c = np.asarray(settings.get("color", [0.3, 0.45, 0.8]), np.float32)
+    ``sun_dir``; ``settings``: a validated ``shots.<name>.sky`` or its :class:`Skylight` (``model: preetham``:
+    :func:`preetham_rgb` with its turbidity, zenith_luminance, reference_elevation, min_view_elevation;
+    ``model: constant``: ``color``)."""
+    s = skylight(settings)
+    if s.model == "preetham":
+        return preetham_rgb(dirs, sun_dir, s.turbidity, s.zenith_luminance, s.reference_elevation,
+                            s.min_view_elevation)
+    if s.model == "constant":
+        c = np.asarray(s.color, np.float32)
         return np.broadcast_to(c, np.shape(dirs)[:-1] + (3,)).copy()
-    raise ValueError(f"unknown sky model {model!r}")
+    raise ValueError(f"unknown sky model {s.model!r}")
 
 

@@ -1,5 +1,13 @@
-"""The sky stage on one photo (Dobashi 2012 §4.1): classify cloud / sky / neither, interpolate the sky
-behind the clouds (∇²L_sky = 0), estimate the sunlight colour c_in, and the soft cloud alpha.
+"""
+Sky extraction
+==============
+
+Defines the sky stage on one photo (Dobashi et al. 2012, §4.1): classify cloud / sky / neither, interpolate the
+sky behind the clouds (∇²L_sky = 0), estimate the sunlight colour c_in, and the soft cloud alpha:
+
+-   :func:`extract_sky`: the whole stage on a linear RGB photo, a :class:`SkyResult`.
+-   :class:`SkySettings`: the stage's parameters (config ``sky``, ``photos.<name>``).
+-   :func:`preview_panels`: the preview mosaic (photo | mask | sky | c_in swatch).
 
 The result is checked for plausibility (:mod:`natscene.sky.plausibility`): a photo that does not look like a
 daytime cloud photo stops the job with what was found and what to do, unless the photo's config accepts it
@@ -8,6 +16,12 @@ daytime cloud photo stops the job with what was found and what to do, unless the
 The Laplace solve treats every non-sky pixel (cloud and neither) as unknown, grown by ``solve_margin``
 pixels (a dilation with a 3x3 cross, repeated) so that the bright, semi-transparent cloud fringe that the
 classifier left in the sky class does not leak into L_sky; L_sky equals the photo on all other pixels.
+
+References
+----------
+-   Dobashi, Y., Iwasaki, W., Ono, A., Yamamoto, T., Yue, Y., & Nishita, T. (2012). An inverse problem approach
+    for automatically adjusting the parameters for rendering clouds using photographs. ACM Transactions on
+    Graphics, 31(6).
 """
 from __future__ import annotations
 
@@ -16,28 +30,33 @@ from dataclasses import asdict, dataclass, field
 import cv2
 import numpy as np
 
-from natscene.config import settings_from_section
+from natscene.config import default_settings, settings_from_section
 from natscene.errors import InputError
 from natscene.sky.laplace import solve_laplace
 from natscene.sky.plausibility import PlausibilityLimits, findings, measure, negative_values
 from natscene.sky.segmentation import AUTO, CLOUD, NEITHER, SKY, check_colour_photo, classify, soft_alpha
 from natscene.sky.sun_colour import SunColour, sun_colour
 
+__all__ = ["SkySettings", "SkyResult", "extract_sky", "preview_panels"]
+
 
 @dataclass
 class SkySettings:
-    """Parameters of the stage (defaults = workflow/schemas/sky.schema.yaml)."""
+    """Parameters of the stage (config ``sky``; no defaults here: workflow/schemas/sky.schema.yaml's are the only
+    ones, :func:`natscene.config.settings_from_section`)."""
 
-    threshold: float | None = None  # s_ab threshold; None = Otsu
-    min_lightness: float = 20.0
-    morphology_radius: int = 2
-    min_region_fraction: float = 1e-4
-    solve_margin: int = 3
-    clip_level: float = 0.99
-    grey_chroma: float = 3.0
-    overcast_cloud_fraction: float = 0.8
-    checks: dict = field(default_factory=dict)  # PlausibilityLimits overrides (sky.checks)
-    accept_unusual: bool = False  # photos.<name>.accept_unusual: implausible findings warn instead of stopping
+    threshold: float | None  # s_ab threshold; None = Otsu
+    min_lightness: float
+    morphology_radius: int
+    min_region_fraction: float
+    solve_margin: int
+    clip_level: float
+    grey_chroma: float
+    overcast_cloud_fraction: float
+    checks: dict  # the PlausibilityLimits (sky.checks)
+    accept_unusual: bool  # photos.<name>.accept_unusual: implausible findings warn instead of stopping
+
+    SCHEMA = (("sky.schema.yaml", ()), ("photos.schema.yaml", ("additionalProperties",)))
 
 
 @dataclass
@@ -98,7 +117,7 @@ def extract_sky(photo: np.ndarray, settings: SkySettings | None = None,
     InputError when the photo is implausible (:mod:`natscene.sky.plausibility`) and
     ``settings.accept_unusual`` is False.
     """
-    st = settings or SkySettings()
+    st = settings or default_settings(SkySettings)
     warnings = []
     neg = negative_values(photo)
     if neg is not None:

@@ -1,6 +1,14 @@
-"""The sky behind the clouds (Dobashi 2012 §4.1): ∇²L_sky(q, λ) = 0 over the removed (cloud) pixels with
-the surrounding sky pixels as fixed (Dirichlet) boundary values, as in Pérez et al. 2003 (Poisson image
-editing with a zero guidance field).
+"""
+Sky behind the clouds
+=====================
+
+Defines the sky behind the clouds (Dobashi et al. 2012, §4.1): ∇²L_sky(q, λ) = 0 over the removed (cloud)
+pixels with the surrounding sky pixels as fixed (Dirichlet) boundary values, as in Pérez et al. 2003 (Poisson
+image editing with a zero guidance field):
+
+-   :func:`solve_laplace`: the harmonic interpolation of the unknown pixels.
+-   :func:`laplace_system`: the 5-point system A x = b of the unknown pixels.
+-   :func:`laplace_residual`: the discrete Laplace residual at the unknown pixels.
 
 Discretisation: the 5-point Laplacian on the pixel grid. For every unknown pixel p with in-image
 4-neighbours N(p):
@@ -14,6 +22,14 @@ for all channels either by smoothed-aggregation multigrid preconditioned CG to a
 (``method="multigrid"``, the default: O(n), :mod:`natscene.sky.multigrid`) or by a SuperLU factorisation
 (``method="direct"``); both are exact solutions of the discrete system (to solver tolerance), not an
 approximate inpainting filter. Linear (and any discrete-harmonic) sky gradients are reproduced exactly.
+
+References
+----------
+-   Dobashi, Y., Iwasaki, W., Ono, A., Yamamoto, T., Yue, Y., & Nishita, T. (2012). An inverse problem approach
+    for automatically adjusting the parameters for rendering clouds using photographs. ACM Transactions on
+    Graphics, 31(6).
+-   Pérez, P., Gangnet, M., & Blake, A. (2003). Poisson image editing. ACM Transactions on Graphics, 22(3),
+    313–318.
 """
 from __future__ import annotations
 
@@ -23,6 +39,8 @@ from scipy.sparse.linalg import splu
 
 from natscene.errors import InputError
 from natscene.sky.multigrid import solve_pcg
+
+__all__ = ["laplace_system", "solve_laplace", "laplace_residual"]
 
 
 def laplace_system(unknown: np.ndarray, known_values: np.ndarray):

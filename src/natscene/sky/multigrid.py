@@ -1,5 +1,13 @@
-"""Smoothed-aggregation multigrid preconditioned conjugate gradients for the sky's Laplace system
-(Dobashi 2012 §4.1; the solver choice is ours: the issue asks for an exact sparse direct or multigrid solve).
+"""
+Multigrid-preconditioned CG
+===========================
+
+Defines smoothed-aggregation multigrid preconditioned conjugate gradients for the sky's Laplace system
+(Dobashi et al. 2012, §4.1 names no solver; this one solves the discrete system exactly, to tolerance):
+
+-   :func:`solve_pcg`: solve A X = B by SA-multigrid preconditioned CG.
+-   :class:`SAMultigrid`: the smoothed-aggregation hierarchy (the V-cycle preconditioner).
+-   :func:`pcg`: preconditioned conjugate gradients for all columns at once.
 
 The 5-point Laplace matrix of :mod:`natscene.sky.laplace` is symmetric positive definite. Aggregates are the
 unknown pixels of each 2x2 block (geometric aggregation on the pixel grid); the tentative prolongation P0
@@ -7,12 +15,22 @@ unknown pixels of each 2x2 block (geometric aggregation on the pixel grid); the 
 spectral radius ≤ 2 by Gershgorin), and coarse operators are Galerkin products Pᵀ A P (Vaněk, Mandel &
 Brezina 1996). A symmetric V-cycle (damped Jacobi pre/post smoothing, exact SuperLU solve on the coarsest
 level) preconditions conjugate gradients, iterated until the residual ‖b − A x‖ ≤ rtol ‖b‖.
+
+References
+----------
+-   Dobashi, Y., Iwasaki, W., Ono, A., Yamamoto, T., Yue, Y., & Nishita, T. (2012). An inverse problem approach
+    for automatically adjusting the parameters for rendering clouds using photographs. ACM Transactions on
+    Graphics, 31(6).
+-   Vaněk, P., Mandel, J., & Brezina, M. (1996). Algebraic multigrid by smoothed aggregation for second and
+    fourth order elliptic problems. Computing, 56(3), 179–196.
 """
 from __future__ import annotations
 
 import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.linalg import LinearOperator, splu
+
+__all__ = ["solve_pcg", "SAMultigrid", "pcg"]
 
 
 class _Level:

@@ -1,4 +1,13 @@
-"""Is this a cloud photo the method can use? Plausibility checks of the sky stage's result (Dobashi 2012 §4.1).
+"""
+Plausibility of a cloud photo
+=============================
+
+Defines the plausibility checks of the sky stage's result (Dobashi et al. 2012, §4.1): is this a cloud photo
+the method can use?
+
+-   :func:`measure`: the numbers the checks compare; :func:`negative_values`: the negative values of a linear
+    photo.
+-   :func:`findings`: what is implausible about a measured segmentation, against :class:`PlausibilityLimits`.
 
 §4.1 classifies pixels by chroma (blue sky, achromatic cloud) and takes the sunlight colour c_in from the
 bright cloud pixels. On a photo that is not a daytime cloud photo the classifier still splits the pixels in
@@ -24,15 +33,19 @@ sunlight colour                c_in within ``max_sun_duv`` (0.02) of the Plancki
                                and its CCT in ``sun_cct_k`` (2000-15000 K: sunset to blue-sky-lit cloud)
 =============================  =========================================================================
 
-Calibrated on the bundled photos (``tests/test_sky_plausibility.py`` rebuilds every case): the kite photo
-(s_ab ratio 0.07, sky s_ab 1.15 at hue 278 deg, c_in 6900 K, Duv 0.003) and its realistic variants
-(crops, exposure x0.4 / x1.8, white balance from 5000 to 7700 K: ratio <= 0.24, |Duv| <= 0.006) pass; the
-flower photo as a cloud photo (ratio 0.81, sky hue 42 deg, c_in 1670 K), a garden (ratio 0.54, hue 43 deg,
-Duv 0.06), a dark overcast sky (sky s_ab 0.05), a photo of blue sky only (ratio 0.81, c_in 147,000 K) and
-green or magenta casts (|Duv| 0.027-0.030) are refused.
+The limits are calibrated on cases built from the bundled photos (``tests/test_sky_plausibility.py``; the
+measures of each case: docs/stages/sky.md, "Which photos are refused").
 
 A refused photo stops the job with what was found and what to do (a hand-painted mask, another photo),
 unless ``photos.<name>.accept_unusual: true``: then the findings become warnings in sun.yaml and the fit.
+
+References
+----------
+-   Dobashi, Y., Iwasaki, W., Ono, A., Yamamoto, T., Yue, Y., & Nishita, T. (2012). An inverse problem approach
+    for automatically adjusting the parameters for rendering clouds using photographs. ACM Transactions on
+    Graphics, 31(6).
+-   Otsu, N. (1979). A threshold selection method from gray-level histograms. IEEE Transactions on Systems, Man,
+    and Cybernetics, 9(1), 62–66.
 """
 from __future__ import annotations
 
@@ -43,18 +56,23 @@ import numpy as np
 from natscene.color import cct_duv, linear_srgb_to_lab
 from natscene.sky.segmentation import CLOUD, SKY, saturation
 
+__all__ = ["PlausibilityLimits", "negative_values", "measure", "findings"]
+
 
 @dataclass
 class PlausibilityLimits:
-    """Limits of the checks (defaults = workflow/schemas/sky.schema.yaml, ``sky.checks``)."""
+    """Limits of the checks (config ``sky.checks``; no defaults here: workflow/schemas/sky.schema.yaml's are the
+    only ones, :func:`natscene.config.settings_from_section`)."""
 
-    min_sky_fraction: float = 0.05
-    min_cloud_fraction: float = 0.01
-    max_cloud_to_sky_saturation: float = 0.4
-    min_sky_saturation: float = 0.2
-    sky_hue_deg: tuple = (180.0, 330.0)
-    sun_cct_k: tuple = (2000.0, 15000.0)
-    max_sun_duv: float = 0.02
+    min_sky_fraction: float
+    min_cloud_fraction: float
+    max_cloud_to_sky_saturation: float
+    min_sky_saturation: float
+    sky_hue_deg: tuple
+    sun_cct_k: tuple
+    max_sun_duv: float
+
+    SCHEMA = (("sky.schema.yaml", ("checks",)),)
 
 
 def negative_values(photo: np.ndarray) -> dict | None:

@@ -1,11 +1,26 @@
-"""Sky products at the fit resolutions (Dobashi 2012 §4.2 compares the synthetic image with the photo
-pixel for pixel in L_sky and by histogram over the cloud pixels, at the precompute's resolution).
+"""
+Sky products at the fit resolutions
+===================================
+
+Defines the resampling of the sky products to the fit resolutions (Dobashi et al. 2012, §4.2 compares the
+synthetic image with the photo pixel for pixel in L_sky and by histogram over the cloud pixels, at the
+precompute's resolution):
+
+-   :func:`crop_box`: the centre crop to a target aspect ratio.
+-   :func:`area_resample`: centre-crop then area-average an image.
+-   :func:`resample_labels`: the majority label per output pixel.
 
 Resampling: the photo is first centre-cropped to the target aspect ratio (so that pixels stay square; no
 crop when the aspects agree), then area-averaged (OpenCV ``INTER_AREA``: each output pixel is the
 area-weighted mean of the input pixels it covers; exact box averaging for integer factors). Linear images
 are averaged in linear RGB. Labels are resampled by area-averaging their one-hot encoding and taking the
 majority class (ties: cloud over sky over neither); the soft alpha is area-averaged.
+
+References
+----------
+-   Dobashi, Y., Iwasaki, W., Ono, A., Yamamoto, T., Yue, Y., & Nishita, T. (2012). An inverse problem approach
+    for automatically adjusting the parameters for rendering clouds using photographs. ACM Transactions on
+    Graphics, 31(6).
 """
 from __future__ import annotations
 
@@ -13,6 +28,8 @@ import cv2
 import numpy as np
 
 from natscene.sky.segmentation import CLOUD, NEITHER, SKY
+
+__all__ = ["crop_box", "area_resample", "resample_labels"]
 
 
 def crop_box(width: int, height: int, tw: int, th: int) -> tuple[int, int, int, int]:

@@ -1,4 +1,17 @@
-"""Cloud / sky classification of a photograph by chroma (Dobashi 2012 §4.1, after Dobashi et al. 2010).
+"""
+Cloud / sky segmentation
+========================
+
+Defines the cloud / sky classification of a photograph by chroma (Dobashi et al. 2012, §4.1, after Dobashi et
+al. 2010):
+
+-   :data:`SKY`, :data:`CLOUD`, :data:`NEITHER`, :data:`AUTO`: the labels.
+-   :func:`check_colour_photo`: the photo as float32, refusing a greyscale photo.
+-   :func:`saturation`: the CIE 1976 saturation s_ab and the lightness L*.
+-   :func:`otsu_threshold`: Otsu's threshold of a 1-D sample.
+-   :func:`decode_hand_mask`: a hand-painted mask to labels.
+-   :func:`classify`: label every pixel.
+-   :func:`soft_alpha`: the cloud opacity α.
 
 §4.1: "each pixel in the input photograph is classified into either a cloud pixel or a sky pixel depending
 on the chroma of each pixel ... If the above method does not work very well, our system allows the user to
@@ -20,6 +33,16 @@ red (R ≥ 0.5, G ≤ 0.25, B ≤ 0.25) = neither; a transparent pixel (alpha < 
 Soft alpha: a cloud pixel is modelled as ``P = α·w·c_in + (1 − α)·L_sky`` (a cloud of the incident
 light's colour c_in, unknown brightness w, in front of the sky). Projecting onto the plane orthogonal to
 c_in removes the unknown ``w``: ``(1 − α) = <P⊥, S⊥> / |S⊥|²`` with ``S = L_sky``; α is clipped to [0, 1].
+
+References
+----------
+-   Dobashi, Y., Shinzo, Y., & Yamamoto, T. (2010). Modeling of clouds from a single photograph. Computer
+    Graphics Forum, 29(7), 2083–2090.
+-   Dobashi, Y., Iwasaki, W., Ono, A., Yamamoto, T., Yue, Y., & Nishita, T. (2012). An inverse problem approach
+    for automatically adjusting the parameters for rendering clouds using photographs. ACM Transactions on
+    Graphics, 31(6).
+-   Otsu, N. (1979). A threshold selection method from gray-level histograms. IEEE Transactions on Systems, Man,
+    and Cybernetics, 9(1), 62–66.
 """
 from __future__ import annotations
 
@@ -28,6 +51,9 @@ import numpy as np
 
 from natscene.color import linear_srgb_to_lab
 from natscene.errors import InputError
+
+__all__ = ["SKY", "CLOUD", "NEITHER", "AUTO", "check_colour_photo", "saturation", "otsu_threshold",
+           "decode_hand_mask", "classify", "soft_alpha"]
 
 SKY, CLOUD, NEITHER = 0, 1, 2
 LABEL_NAMES = {SKY: "sky", CLOUD: "cloud", NEITHER: "neither"}

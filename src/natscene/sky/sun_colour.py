@@ -1,4 +1,10 @@
-"""Colour of the light incident on the clouds, c_in(λ) (Dobashi 2012 §4.1).
+"""
+Sunlight colour
+===============
+
+Defines the colour of the light incident on the clouds, c_in(λ) (Dobashi et al. 2012, §4.1):
+
+-   :func:`sun_colour`: c_in from the brighter half of the cloud pixels, a :class:`SunColour`.
 
 §4.1: "the colors of the cloud pixels are converted into grayscale. Each of the cloud pixels is then
 classified into either a brighter or a darker pixel [...] by Otsu [1979]. The average color of the brighter
@@ -12,6 +18,14 @@ Normalisation: c_in is the mean linear RGB of the brighter class divided by its 
 Y(c_in) = 1 (white light gives [1, 1, 1]); the intensity is left to L_in, fitted by the GA.
 "Near grey": CIE C*ab of c_in (at L* = 100) below ``grey_chroma``. "Overcast": cloud pixels make up at least
 ``overcast_cloud_fraction`` of the sky + cloud pixels. Both together give a warning, not a failure.
+
+References
+----------
+-   Dobashi, Y., Iwasaki, W., Ono, A., Yamamoto, T., Yue, Y., & Nishita, T. (2012). An inverse problem approach
+    for automatically adjusting the parameters for rendering clouds using photographs. ACM Transactions on
+    Graphics, 31(6).
+-   Otsu, N. (1979). A threshold selection method from gray-level histograms. IEEE Transactions on Systems, Man,
+    and Cybernetics, 9(1), 62–66.
 """
 from __future__ import annotations
 
@@ -22,6 +36,8 @@ import numpy as np
 from natscene.color import linear_srgb_to_lab, luminance
 from natscene.errors import InputError
 from natscene.sky.segmentation import CLOUD, SKY, otsu_threshold
+
+__all__ = ["SunColour", "sun_colour"]
 
 
 @dataclass

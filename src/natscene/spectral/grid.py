@@ -1,5 +1,17 @@
-"""Wavelength grid, CIE tables on it, and spectrum -> CIE XYZ -> linear sRGB (Dong 2007 §2.4, the
-colour-transformation stage). The one home of the wavelength grid and of the colour-matching functions and
+"""
+Wavelength grid and CIE integration
+===================================
+
+Defines the wavelength grid, the CIE tables on it, and spectrum -> CIE XYZ -> linear sRGB (Dong 2007, §2.4, the
+colour-transformation stage):
+
+-   :class:`WavelengthGrid`, :data:`DEFAULT_GRID`: regular wavelength sampling in nm.
+-   :func:`cmfs`, :func:`illuminant_table`: the CIE 1931 2° colour-matching functions and an illuminant's SPD on
+    a grid.
+-   :func:`kappa`, :func:`integration_matrix`: the constant and the matrix of the X_k integration.
+-   :func:`spectrum_to_rgb`, :func:`spectrum_to_rgb_matrix`, :func:`reflectance_to_rgb`: spectra to linear sRGB.
+
+The one home of the wavelength grid and of the colour-matching functions and
 illuminant tables (colour-science's) for every stage that works with spectra (compositing, pigments, leaves).
 
 Spectra are sampled on a regular grid (default 380-780 nm every 5 nm, 81 samples; the pigment stages use
@@ -9,6 +21,12 @@ Spectra are sampled on a regular grid (default 380-780 nm every 5 nm, 81 samples
 560 nm) integrate to Y = 1, so a *radiance* spectrum equal to D65 is the linear-sRGB white (1, 1, 1) that the
 RGB part of the renderer uses, and a reflectance R lit by D65 gives its usual XYZ (Y = luminance factor).
 XYZ -> linear sRGB goes through :mod:`natscene.color` (colour-science).
+
+References
+----------
+-   Dong, W. (2007). Rendering algorithms for natural scenes. PhD thesis, Université Henri Poincaré – Nancy 1.
+-   Mansencal, T., Mauderer, M., Parsons, M., et al. Colour: Colour Science for Python (software).
+    https://www.colour-science.org
 """
 from __future__ import annotations
 
@@ -20,6 +38,9 @@ import numpy as np
 
 from natscene.color import xyz_to_linear_srgb
 from natscene.errors import InputError
+
+__all__ = ["WavelengthGrid", "DEFAULT_GRID", "cmfs", "illuminant_table", "kappa", "integration_matrix",
+           "spectrum_to_rgb", "spectrum_to_rgb_matrix", "reflectance_to_rgb"]
 
 CMFS_NAME = "CIE 1931 2 Degree Standard Observer"
 

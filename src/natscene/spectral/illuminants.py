@@ -1,4 +1,9 @@
-"""Illuminant SPDs (Dong 2007 §2.3.1: spectral light sources; §2.5: a parallel D65 light).
+"""
+Illuminant SPDs
+===============
+
+Defines the illuminant SPDs of the spectral renderer (Dong 2007, §2.3.1: spectral light sources; §2.5: a
+parallel D65 light):
 
 - :func:`d65`: CIE standard illuminant D65 (colour-science's table) on the grid, scaled so that its
   radiance is linear-sRGB white (1, 1, 1) (see :mod:`natscene.spectral.grid`);
@@ -6,6 +11,13 @@
 - :func:`sun_spd`: a sunlight SPD matched to a fitted sunlight colour ``c_in`` (Dobashi's c_in, linear
   sRGB): the CIE daylight SPD at the CCT of c_in's chromaticity, times the smooth spectral-primary
   residual that brings its colour exactly onto c_in (so the spectral sun and the RGB sun agree).
+
+References
+----------
+-   Dobashi, Y., Iwasaki, W., Ono, A., Yamamoto, T., Yue, Y., & Nishita, T. (2012). An inverse problem approach
+    for automatically adjusting the parameters for rendering clouds using photographs. ACM Transactions on
+    Graphics, 31(6).
+-   Dong, W. (2007). Rendering algorithms for natural scenes. PhD thesis, Université Henri Poincaré – Nancy 1.
 """
 from __future__ import annotations
 
@@ -14,6 +26,8 @@ import numpy as np
 
 from natscene.color import linear_srgb_to_xyz
 from natscene.spectral.grid import DEFAULT_GRID, WavelengthGrid, illuminant_table, kappa, spectrum_to_rgb
+
+__all__ = ["d65", "daylight", "sun_spd"]
 
 
 def d65(grid: WavelengthGrid = DEFAULT_GRID) -> np.ndarray:
@@ -61,5 +75,3 @@ def sun_spd(c_in, grid: WavelengthGrid = DEFAULT_GRID, method: str = "mallett201
         got = spectrum_to_rgb(spd, grid)
         ratio = ratio * c / np.maximum(got, 1e-9)
     return spd
-
-__all__ = ["d65", "daylight", "sun_spd", "kappa"]

@@ -1,5 +1,12 @@
-"""Measured complex refractive indices n̂ = n + iκ of metals (Dong 2007 §1.1.6, §2.5: gold film on copper,
-indices from measured data [Pal85]).
+"""
+Complex refractive indices
+==========================
+
+Defines the measured complex refractive indices n̂ = n + iκ of metals (Dong 2007, §1.1.6, §2.5: gold film on
+copper, indices from measured data [Pal85]):
+
+-   :func:`complex_index`: n + iκ of a named metal at given wavelengths.
+-   :func:`ior_directory`: Mitsuba's directory of spectral index tables.
 
 The data are the spectral conductor tables that ship with Mitsuba 3 (``mitsuba/data/ior/<name>.eta.spd`` and
 ``<name>.k.spd``, the files Mitsuba's ``conductor`` plugin loads in its spectral variants). Their headers
@@ -7,6 +14,12 @@ say "data from www.luxpop.com database" (LuxPop optical constants, compiled from
 the ``*_palik`` files are Palik's Handbook of Optical Constants of Solids, 1985, Dong's [Pal85]). Each row is
 ``wavelength_nm value``. Au and Cu default to the plain tables (298-886 nm, cover the visible range);
 ``Cu_palik`` is available too. Linear interpolation onto the wavelength grid.
+
+References
+----------
+-   Dong, W. (2007). Rendering algorithms for natural scenes. PhD thesis, Université Henri Poincaré – Nancy 1.
+-   Jakob, W., et al. (2022). Mitsuba 3 renderer. https://mitsuba-renderer.org
+-   Palik, E. D. (1985). Handbook of Optical Constants of Solids. Academic Press.
 """
 from __future__ import annotations
 
@@ -16,6 +29,8 @@ from pathlib import Path
 import numpy as np
 
 from natscene.errors import InputError
+
+__all__ = ["complex_index", "ior_directory"]
 
 
 def ior_directory() -> Path:

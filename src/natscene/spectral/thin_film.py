@@ -1,6 +1,13 @@
-"""Multilayer thin-film reflectance and transmittance (Dong 2007 §1.1.6, Eqs. 1.14-1.25, after Hirayama et
-al. 1999 [HKY+99] and Born & Wolf [BW99]); tabulated per (incident angle, wavelength) as the preprocessing
-step of Dong §2.2 (Eqs. 2.1-2.2).
+"""
+Multilayer thin films
+=====================
+
+Defines the multilayer thin-film reflectance and transmittance (Dong 2007, §1.1.6, Eqs. 1.14-1.25, after
+Hirayama et al. 1999 [HKY+99] and Born & Wolf [BW99]), tabulated per (incident angle, wavelength) as the
+preprocessing step of Dong §2.2 (Eqs. 2.1-2.2):
+
+-   :func:`multilayer`: the composite reflectance and transmittance of a stack.
+-   :func:`film_table`: R and T of a stack tabulated per (incident angle, wavelength), a :class:`FilmTable`.
 
 Layers are numbered as in Dong's Fig. 1.8: 0 is the incident medium (real index n_0), 1..N the films
 (complex n̂_j, thickness d_j), N+1 the substrate. Boundary B_j separates layers j-1 and j.
@@ -18,6 +25,15 @@ Two misprints of the thesis text are corrected (both are Born & Wolf's formulas,
 result against an independent transfer-matrix computation): in Eq. 1.17 the denominator is
 ``1 + r_j γ e^{2iφ_j}`` (the text prints ``1 + r_j τ e^{iφ_j}``), and the numerator of Eq. 1.21 is
 ``n̂_{j-1} s_z,j-1 - n̂_j s_z,j`` (the text prints ``n̂_j s_z,j-1`` for its second term).
+
+References
+----------
+-   Born, M., & Wolf, E. (1999). Principles of Optics: Electromagnetic Theory of Propagation, Interference and
+    Diffraction of Light (7th ed.). Cambridge University Press.
+-   Dong, W. (2007). Rendering algorithms for natural scenes. PhD thesis, Université Henri Poincaré – Nancy 1.
+-   Hirayama, H., Kaneda, K., Yamashita, H., Yamaji, Y., & Monden, Y. (1999). Visualization of optical phenomena
+    caused by multilayer films with complex refractive indices. Proceedings of the 7th Pacific Conference on
+    Computer Graphics and Applications (PG '99), 128–137.
 """
 from __future__ import annotations
 
@@ -26,6 +42,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from natscene.spectral.grid import DEFAULT_GRID, WavelengthGrid
+
+__all__ = ["multilayer", "FilmTable", "film_table"]
 
 
 def _kz(n: np.ndarray, n0_sin: np.ndarray) -> np.ndarray:

@@ -1,7 +1,15 @@
-"""RGB -> spectrum upsampling (Dong 2007 §2.3.1: "RGB light sources ... converted into spectrum"; §2.4:
-the RGB part gathered by a ray that hits a spectral material is converted to a spectrum).
+"""
+RGB to spectrum upsampling
+==========================
 
-Two published methods:
+Defines the RGB -> spectrum upsampling of the hybrid renderer (Dong 2007, §2.3.1: "RGB light sources ...
+converted into spectrum"; §2.4: the RGB part gathered by a ray that hits a spectral material is converted to a
+spectrum):
+
+-   :func:`rgb_to_reflectance`: reflectance spectra of linear-sRGB reflectances.
+-   :func:`rgb_to_radiance`: radiance spectra of linear-sRGB radiances (D65 × the upsampled reflectance).
+
+Two published methods (:data:`METHODS`):
 
 - ``"mallett2019"`` (default): Mallett & Yuksel, "Spectral Primary Decomposition for Rendering with sRGB
   Reflectance", EGSR 2019. A reflectance is ``r B_r(λ) + g B_g(λ) + b B_b(λ)`` with three fixed basis
@@ -11,6 +19,13 @@ Two published methods:
   colour is (r, g, b) again.
 - ``"smits1999"``: Smits, "An RGB-to-Spectrum Conversion for Reflectances", JGT 1999 (colour-science's
   basis spectra, vectorised here): piecewise combination of white, cyan, magenta, yellow, red, green, blue.
+
+References
+----------
+-   Dong, W. (2007). Rendering algorithms for natural scenes. PhD thesis, Université Henri Poincaré – Nancy 1.
+-   Mallett, I., & Yuksel, C. (2019). Spectral primary decomposition for rendering with sRGB reflectance.
+    Eurographics Symposium on Rendering (EGSR) 2019.
+-   Smits, B. (1999). An RGB-to-spectrum conversion for reflectances. Journal of Graphics Tools, 4(4), 11–22.
 """
 from __future__ import annotations
 
@@ -20,6 +35,8 @@ import colour
 import numpy as np
 
 from natscene.spectral.grid import DEFAULT_GRID, WavelengthGrid, illuminant_table
+
+__all__ = ["METHODS", "rgb_to_reflectance", "rgb_to_radiance"]
 
 METHODS = ("mallett2019", "smits1999")
 

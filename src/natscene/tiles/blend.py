@@ -1,5 +1,12 @@
-"""Gradient-domain blending of a merged tile across its seams (Pérez et al. 2003 Poisson editing, used by
-Dong 2007 §5.6 for embedment; Kwatra et al. 2003 §3 hide the remaining seam steps by blending too).
+"""
+Poisson blending of a tile
+==========================
+
+Defines the gradient-domain blending of a merged tile across its seams (Pérez et al. 2003 Poisson editing, used
+by Dong 2007, §5.6 for embedment; Kwatra et al. 2003, §3 hide the remaining seam steps by blending too):
+
+-   :func:`poisson_blend`: the tile of a source map blended in the gradient domain, its border band fixed.
+-   :func:`guidance`: the guidance g(p, q) of a source map.
 
 A tile is a source map (see :mod:`natscene.tiles.graphcut`): pixel p shows ``example[p + o(p)]``. For
 every 4-neighbour pair (p, q) the guidance g(p, q) is the difference each source shows across the pair,
@@ -14,6 +21,14 @@ band: the edge constraints of the ω-tiles stay exact), i.e. the discrete Poisso
 spreads each seam's intensity step over the tile; across a seam the step itself is replaced by the
 mean of the two sources' differences. The system matrix depends only on the pinned set, so one sparse
 LU factorisation serves every tile and channel.
+
+References
+----------
+-   Dong, W. (2007). Rendering algorithms for natural scenes. PhD thesis, Université Henri Poincaré – Nancy 1.
+-   Kwatra, V., Schödl, A., Essa, I., Turk, G., & Bobick, A. (2003). Graph-cut textures: image and video synthesis
+    using graph cuts. ACM Transactions on Graphics, 22(3), 277–286.
+-   Pérez, P., Gangnet, M., & Blake, A. (2003). Poisson image editing. ACM Transactions on Graphics, 22(3),
+    313–318.
 """
 from __future__ import annotations
 
@@ -24,6 +39,8 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from natscene.tiles.graphcut import _pair_values, render
+
+__all__ = ["poisson_blend", "guidance"]
 
 
 def _incidence(s: int):

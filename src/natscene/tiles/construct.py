@@ -1,4 +1,16 @@
-"""Tile-set construction (Dong 2007 §5.4.3 working flow): GA selection of the sample patches, the
+"""
+Tile-set construction
+=====================
+
+Defines the construction of an ω-tile set from an example texture (Dong 2007, §5.4.3 working flow):
+
+-   :func:`construct`: the whole construction, a :class:`TileSetBuild`.
+-   :func:`intermediate_tiles`: the tiles made of the four patch quarters named by their corner colours.
+-   :func:`candidate_patches`: the best matching patches of a tile by Eq. 5.1.
+-   :func:`to_atlas`, :func:`from_atlas`: tiles to an atlas image and back.
+-   :func:`diagram`: the preview of a tile set with its corner colours.
+
+The construction: GA selection of the sample patches, the
 intermediate tiles cut from the centre of the 2x2 patch blocks, and junction removal by merging each
 tile's best matching patch with a circle-constrained graph-cut seam (§5.2), refined by further merges of
 the tile's own sample patches continued past their quarters and of the next-best matching patches, each
@@ -7,6 +19,10 @@ kept only where it lowers the seam energy (:func:`natscene.tiles.graphcut.build_
 Matching errors and seams are computed on display-encoded (sRGB) values, where squared differences are
 closer to perceived differences; the tiles themselves are cut from the linear example with the same
 coordinates and masks.
+
+References
+----------
+-   Dong, W. (2007). Rendering algorithms for natural scenes. PhD thesis, Université Henri Poincaré – Nancy 1.
 """
 from __future__ import annotations
 
@@ -19,6 +35,9 @@ from natscene.tiles.tile_ga import GAParams, GAResult, MatchCost, quarter_layout
 from natscene.tiles.blend import poisson_blend
 from natscene.tiles.graphcut import axis_weights, build_tile, constraint_masks, intermediate_offsets, render
 from natscene.tiles.omega import TileSet
+
+__all__ = ["construct", "TileSetBuild", "intermediate_tiles", "candidate_patches", "to_atlas", "from_atlas",
+           "diagram"]
 
 
 def intermediate_tiles(example: np.ndarray, genes: np.ndarray, ts: TileSet, s: int) -> np.ndarray:
@@ -84,7 +103,10 @@ def construct(example_linear: np.ndarray, ts: TileSet, tile_size: int, params: G
     if lin.ndim == 2:
         lin = lin[..., None]
     enc = linear_to_srgb(lin)
-    p = params or GAParams()
+    if params is None:
+        from natscene.config import default_settings
+        params = default_settings(GAParams)
+    p = params
     cost = MatchCost(enc, tile_size, p.metric, p.mu)
     ga = run_tile_ga(enc, ts, tile_size, p, seed=seed, cost=cost)
     s = int(tile_size)

@@ -1,9 +1,25 @@
-"""Meaning embedment (Dong 2007 §5.6): an object cut from another image with GrabCut (Rother et al.
-2004) is pasted into chosen tiles by Poisson image editing (Pérez et al. 2003; a sparse solve here:
-OpenCV 4.x ``seamlessClone`` left circular masks unchanged in our tests).
+"""
+Meaning embedment
+=================
+
+Defines the meaning embedment of Dong 2007, §5.6: an object cut from another image with GrabCut (Rother et al.
+2004) is pasted into chosen tiles by Poisson image editing (Pérez et al. 2003; solved here with a sparse solve,
+not OpenCV's ``seamlessClone``: docs/stages/tiles.md):
+
+-   :func:`grabcut_object`: the foreground object (and its mask) inside a rectangle of an image.
+-   :func:`embed`: clone an object into the centre of chosen tiles.
+-   :func:`poisson_clone`: Poisson image editing (seamless cloning) inside a mask.
 
 The object is scaled to fit inside the tile's graph-cut circle and cloned at the tile centre; pixels
 outside the circle are restored afterwards so tile borders (and tiling continuity) are unchanged.
+
+References
+----------
+-   Dong, W. (2007). Rendering algorithms for natural scenes. PhD thesis, Université Henri Poincaré – Nancy 1.
+-   Pérez, P., Gangnet, M., & Blake, A. (2003). Poisson image editing. ACM Transactions on Graphics, 22(3),
+    313–318.
+-   Rother, C., Kolmogorov, V., & Blake, A. (2004). "GrabCut": interactive foreground extraction using iterated
+    graph cuts. ACM Transactions on Graphics, 23(3), 309–314.
 """
 from __future__ import annotations
 
@@ -12,6 +28,8 @@ import numpy as np
 
 from natscene.color import linear_to_srgb, srgb_to_linear
 from natscene.tiles.graphcut import constraint_masks
+
+__all__ = ["grabcut_object", "embed", "poisson_clone"]
 
 
 def grabcut_object(source_linear: np.ndarray, rect, iterations: int = 5, pad: int = 4):

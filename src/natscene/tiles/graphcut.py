@@ -1,5 +1,18 @@
-"""Junction removal: matching patches merged into the intermediate tile by graph-cut seams constrained
-to a circle (Dong 2007 §5.2, Fig. 5.2(b); Ng et al. 2005; seam costs of Kwatra et al. 2003).
+"""
+Junction removal by graph cut
+=============================
+
+Defines the junction removal of Dong 2007, §5.2, Fig. 5.2(b): matching patches merged into the intermediate
+tile by graph-cut seams constrained to a circle (Ng et al. 2005; seam costs of Kwatra et al. 2003):
+
+-   :func:`build_tile`: the §5.2 construction of one tile (best patch, then refinement by further merges).
+-   :func:`merge`: one circle-constrained merge of a patch into a tile given as arrays.
+-   :func:`intermediate_offsets`, :func:`render`: the source map of an intermediate tile, and the tile of a
+    source map.
+-   :func:`constraint_masks`, :func:`axis_weights`: the pinned and free regions, and the per-direction seam
+    prices.
+-   :func:`seam_energy`, :func:`tile_energy`, :func:`array_pair_values`: seam energies.
+-   :func:`junction_extensions`: the four sample patches continued past their quarter edges.
 
 A tile is a *source map*: every pixel is a pixel of the example, ``example[y + oy, x + ox]`` with a
 per-pixel offset (oy, ox). The intermediate tile has four offsets (its four patch quarters), so its
@@ -31,19 +44,32 @@ hold their original quarters) is charged ``junction_weight`` times its seam pric
 :func:`natscene.tiles.construct.construct`; clipped to E(A,B) + E(B,A) so the energy stays submodular):
 at equal Kwatra price a long straight line across the texture grain, repeated in every tile, is more
 visible than the curved seams around a patch, and §5.2 asks for the junctions to be erased.
-An earlier version forced a 2-pixel band along the mid-lines to the patch and priced seams on the
-intermediate tile as if it were one image; the cut then ran straight beside the band (visible straight
-seams along the tiles' mid-lines every tile size).
+Forcing a band along the mid-lines to the patch instead, with seams priced on the intermediate tile as if it
+were one image, lets the cut run straight beside the band (visible straight seams along the tiles' mid-lines
+every tile size).
 
 Optional gradient normalisation (Kwatra et al. 2003, ``normalise`` > 0): all terms of a pair divided by
 eps + |Xp(q) - Xp(p)| + |Xq(q) - Xq(p)| + 2 |B(q) - B(p)| (the directional differences of the sources
 along the pair), eps = ``normalise`` x its mean over the tile; one factor per pair keeps the energy
 submodular. It moves seams into busy regions.
+
+References
+----------
+-   Dong, W. (2007). Rendering algorithms for natural scenes. PhD thesis, Université Henri Poincaré – Nancy 1.
+-   Kolmogorov, V., & Zabih, R. (2004). What energy functions can be minimized via graph cuts? IEEE Transactions
+    on Pattern Analysis and Machine Intelligence, 26(2), 147–159.
+-   Kwatra, V., Schödl, A., Essa, I., Turk, G., & Bobick, A. (2003). Graph-cut textures: image and video synthesis
+    using graph cuts. ACM Transactions on Graphics, 22(3), 277–286.
+-   Ng, T.-Y., Wen, C., Tan, T.-S., Zhang, X., & Kim, Y. J. (2005). Generating an ω-tile set for texture
+    synthesis. Proceedings of Computer Graphics International 2005 (CGI'05), 177–184.
 """
 from __future__ import annotations
 
 import maxflow
 import numpy as np
+
+__all__ = ["build_tile", "merge", "intermediate_offsets", "render", "constraint_masks", "axis_weights",
+           "seam_energy", "tile_energy", "array_pair_values", "junction_extensions"]
 
 INF = 1e12
 UNKNOWN = 2.0 * np.sqrt(3.0)     # cost of one term whose continued source lies outside the example

@@ -1,4 +1,14 @@
-"""ω-tile sets (Dong 2007 §5.3, Fig. 5.3; Ng et al. 2005) and the scan-line completability check.
+"""
+ω-tile sets
+===========
+
+Defines the ω-tile sets (Dong 2007, §5.3, Fig. 5.3; Ng et al. 2005) and the scan-line completability check:
+
+-   :class:`TileSet`, :func:`tile_set`: a tile set by name (B, N1, N2, N3, N4).
+-   :func:`basic_set`, :func:`extend`: the basic set B and the §5.3.2 extension rule.
+-   :data:`NG_16_TILES`: Ng et al.'s 16-tile set; :data:`SQUARE_RGB`: the squares' display colours.
+-   :func:`build_lookup`: the candidate tiles per scan-line constraint, a :class:`Lookup`.
+-   :func:`dead_ends`, :func:`is_completable`: the completability check (§5.3.2).
 
 An ω-tile is cut from the centre of a 2×2 block of square sample patches, so each of its four quarters
 is a quarter of one patch; the patch (its "colour square") contributing to a corner is the tile's corner
@@ -21,10 +31,10 @@ in an open-source ω-tile implementation; :data:`NG_16_TILES`) and are transpose
 
 Repetition: in every one of the 8 candidate sets each (TL, TR, BL) triple has exactly one tile, so a
 scan-line tiling with B is fixed by its first row and column and is periodic (with this B: the same tile
-4 rows down in 100% of positions). The extensions only add choices between the old and the new colour
+4 rows down everywhere). The extensions only add choices between the old and the new colour
 of one square (Y/C, R/M), so with N2 the pattern of colour classes stays periodic and the same tile
-recurs 4 rows down in about 26% of positions (1/36 for independent draws); G and B vertices always hold
-the same patch. :func:`tile_set` also offers N3 and N4 (the rule applied again with G -> W and
+recurs 4 rows down far more often than for independent draws (docs/stages/tiles.md, "Measured"); G and B
+vertices always hold the same patch. :func:`tile_set` also offers N3 and N4 (the rule applied again with G -> W and
 B -> K, as §5.3.2 allows: "we can keep on increasing the sample patches"), which give every vertex a
 choice of two patches.
 
@@ -40,6 +50,12 @@ and holding R twice; for a balanced B (each square on 8 corners, r + d = 8) that
 two double-red tiles in B. None of the 8 sets that satisfy the text has that (all have d = 1 and give 32,
 34 or 36 tiles; the two subsets of Ng's 16-tile set give 36), so we keep 36 and take the 38 to be a
 miscount in the thesis (tests/test_tiles.py re-derives the count and checks the subsets of the 16-set).
+
+References
+----------
+-   Dong, W. (2007). Rendering algorithms for natural scenes. PhD thesis, Université Henri Poincaré – Nancy 1.
+-   Ng, T.-Y., Wen, C., Tan, T.-S., Zhang, X., & Kim, Y. J. (2005). Generating an ω-tile set for texture
+    synthesis. Proceedings of Computer Graphics International 2005 (CGI'05), 177–184.
 """
 from __future__ import annotations
 
@@ -47,6 +63,9 @@ from dataclasses import dataclass, field
 from itertools import product
 
 import numpy as np
+
+__all__ = ["TileSet", "tile_set", "basic_set", "extend", "NG_16_TILES", "SQUARE_RGB", "Lookup", "build_lookup",
+           "dead_ends", "is_completable"]
 
 #: display colours of the squares (sRGB 0..1), for tile-set diagrams
 SQUARE_RGB = {"R": (0.85, 0.15, 0.15), "G": (0.15, 0.7, 0.2), "B": (0.15, 0.3, 0.9),

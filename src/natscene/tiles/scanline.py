@@ -1,15 +1,31 @@
-"""Run-time ω-tiling (Dong 2007 §5.3.1, §5.4.3; Ng et al. 2005): seeded scan-line tile placement with
-corner-colour (edge) constraints, and the texture as one vectorised gather from the tile atlas.
+"""
+Scan-line tiling
+================
+
+Defines the run-time ω-tiling (Dong 2007, §5.3.1, §5.4.3; Ng et al. 2005): seeded scan-line tile placement with
+corner-colour (edge) constraints, and the texture as one vectorised gather from the tile atlas:
+
+-   :func:`scanline_tiling`: a random valid tiling (:class:`TilingDeadEnd` where a set is not completable).
+-   :func:`tiling_violations`: the tile borders whose corner colours disagree.
+-   :func:`gather_texture`: the texture of a tiling from the tiles; :func:`tiles_for`: the tiles a size needs.
 
 Scan-line order: the top-left tile is drawn at random; every other tile is drawn uniformly among the
 tiles whose TL, TR (shared with the tile above) and BL (shared with the tile on the left) match; the
 first row constrains only (TL, BL), the first column only (TL, TR).
+
+References
+----------
+-   Dong, W. (2007). Rendering algorithms for natural scenes. PhD thesis, Université Henri Poincaré – Nancy 1.
+-   Ng, T.-Y., Wen, C., Tan, T.-S., Zhang, X., & Kim, Y. J. (2005). Generating an ω-tile set for texture
+    synthesis. Proceedings of Computer Graphics International 2005 (CGI'05), 177–184.
 """
 from __future__ import annotations
 
 import numpy as np
 
 from natscene.tiles.omega import TileSet, build_lookup
+
+__all__ = ["scanline_tiling", "TilingDeadEnd", "tiling_violations", "gather_texture", "tiles_for"]
 
 
 class TilingDeadEnd(RuntimeError):

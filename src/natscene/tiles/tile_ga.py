@@ -1,5 +1,14 @@
-"""The ω-tile GA (:func:`run_tile_ga`): sample-patch selection by genetic algorithm (Dong 2007 §5.4.2,
-Eqs. 5.1-5.6).
+"""
+ω-tile GA
+=========
+
+Defines the sample-patch selection of an ω-tile set by genetic algorithm (Dong 2007, §5.4.2, Eqs. 5.1-5.6):
+
+-   :func:`run_tile_ga`: select the n sample patches of a set from an example, a :class:`GAResult`.
+-   :class:`GAParams`: the GA settings with the defaults of §5.5.
+-   :class:`MatchCost`, :func:`quarter_layout`: the quarter SSD maps of Eq. 5.1 and the quarters' layout.
+-   :func:`evaluation`: E of Eq. 5.4.
+-   :func:`min_patch_positions`, :func:`max_tile_size`, :func:`min_example_side`: what an example must offer.
 
 A chromosome holds the n sample-patch coordinates (one gene per colour square, ``(y, x)`` of the patch's
 top-left corner in the example). Its evaluation (Eqs. 5.1-5.4) over the m intermediate tiles of the set:
@@ -27,6 +36,10 @@ termination after N_g generations or N_o generations without improvement of the 
 pop_size = 40, alpha = 0.05, P_c = 0.3, P_m = 0.2, N_g = 50, N_o = 5 (§5.5).
 Deviation: the paper writes the mutation range as 1 <= n1 < n2 <= n - 1 (which, read 1-based, would
 never mutate the last gene); here n1 < n2 are drawn among all n genes.
+
+References
+----------
+-   Dong, W. (2007). Rendering algorithms for natural scenes. PhD thesis, Université Henri Poincaré – Nancy 1.
 """
 from __future__ import annotations
 
@@ -36,24 +49,29 @@ import numpy as np
 
 from natscene.tiles.omega import TileSet
 
+__all__ = ["run_tile_ga", "GAParams", "GAResult", "MatchCost", "quarter_layout", "evaluation",
+           "min_patch_positions", "max_tile_size", "min_example_side"]
+
 METRICS = ("color", "gradient_sum", "gradient_ratio")
 
 
 @dataclass
 class GAParams:
-    """GA settings with the defaults of Dong 2007 §5.5."""
+    """GA settings (config ``tiles.<name>.ga``; no defaults here: workflow/schemas/tiles.schema.yaml's, Dong 2007
+    §5.5's, are the only ones, :func:`natscene.config.settings_from_section`)."""
 
-    pop_size: int = 40
-    alpha: float = 0.05
-    p_c: float = 0.3
-    p_m: float = 0.2
-    n_g: int = 50
-    n_o: int = 5
-    lam: float = 0.8
-    metric: str = "color"
-    mu: float = 10.0
+    pop_size: int
+    alpha: float
+    p_c: float
+    p_m: float
+    n_g: int
+    n_o: int
+    lam: float
+    metric: str
+    mu: float
 
     CONFIG_NAMES = {"lambda": "lam"}  # config name -> field (``lambda`` is a Python keyword)
+    SCHEMA = (("tiles.schema.yaml", ("additionalProperties", "ga")),)
 
 
 def quarter_layout(s: int):
@@ -215,7 +233,10 @@ def random_genes(rng, n: int, PH: int, PW: int, exclude=()) -> np.ndarray:
 def run_tile_ga(example: np.ndarray, ts: TileSet, tile_size: int, params: GAParams | None = None,
            seed: int = 0, cost: MatchCost | None = None) -> GAResult:
     """Select the n sample patches of ``ts`` from ``example`` by the GA of §5.4.2."""
-    p = params or GAParams()
+    if params is None:
+        from natscene.config import default_settings
+        params = default_settings(GAParams)
+    p = params
     if not (0 < p.alpha < 1) or not (0 <= p.p_c <= 1) or not (0 < p.p_m < 1) or p.pop_size < 2:
         raise ValueError(f"invalid GA parameters {p}")
     rng = np.random.default_rng(seed)

@@ -1,4 +1,11 @@
-"""The `volume` stage: a config entry -> a placed, validated density grid with its extinction scale.
+"""
+Volume stage
+============
+
+Defines the ``volume`` stage: a config entry -> a placed, validated density grid with its extinction scale:
+
+-   :func:`build_volume`: generate (or import) the volume of a ``volumes.<name>`` entry, and its statistics.
+-   :func:`world_box`: the world box of a procedural entry; :data:`DEFAULT_SIZE_M`, :data:`DEFAULT_ALTITUDE_M`.
 
 World placement (DESIGN §3, metres, y up, ground y = 0): the box has cubic voxels, its longest side ``size``
 metres (kind defaults in :data:`DEFAULT_SIZE_M`: a 2 km cumulus, a 10 km cumulonimbus), centred on x = z = 0,
@@ -19,6 +26,8 @@ import numpy as np
 from natscene.errors import InputError
 from natscene.volume.grid import Volume, import_grid, mean_optical_depth, placement
 from natscene.volume.procedural import KINDS, generate, statistics
+
+__all__ = ["build_volume", "world_box", "DEFAULT_SIZE_M", "DEFAULT_ALTITUDE_M"]
 
 PROCEDURAL_KEYS = ("blobs", "octaves", "lacunarity", "gain", "base_frequency", "billow", "warp", "edge",
                    "erosion", "interior", "streak", "coverage", "thickness", "cells", "relief", "heap_min", "heap_max")

@@ -1,4 +1,14 @@
-"""Density grids on disk and in memory: Mitsuba's binary ``.vol`` format, user grid import and validation.
+"""
+Density grids
+=============
+
+Defines the density grids on disk and in memory: Mitsuba's binary ``.vol`` format, user grid import and
+validation:
+
+-   :class:`Volume`, :func:`placement`: a density grid placed in the world, and the world box of a grid.
+-   :func:`write_vol`, :func:`read_vol`: Mitsuba ``.vol`` files; :func:`load_volume`: the ``volume`` rule's output.
+-   :func:`import_grid`: a user grid (``.vdb``, ``.vol``, ``.npy``), validated.
+-   :func:`column_statistics`, :func:`mean_optical_depth`: the columns ∫ rho ds through the grid.
 
 Mitsuba 3 ``.vol`` (version 3): bytes ``VOL``, uint8 version 3, int32 encoding (1 = float32), int32 xres,
 yres, zres, int32 channels, 6 float32 bounding box (xmin, ymin, zmin, xmax, ymax, zmax), then float32 data
@@ -20,6 +30,9 @@ import numpy as np
 
 from natscene.errors import InputError
 from natscene.io import atomic_path, read_yaml
+
+__all__ = ["Volume", "placement", "write_vol", "read_vol", "load_volume", "import_grid", "column_statistics",
+           "mean_optical_depth"]
 
 MAX_RES = 1024
 

@@ -1,19 +1,35 @@
-"""Measurements of cloud detail: silhouette boundary dimension, octave band energy, thin-edge fraction.
+"""
+Measures of cloud detail
+========================
+
+Defines the measures of cloud detail that the volume tests and previews compare with real clouds
+(docs/stages/volume.md, "Previews and measured detail"):
+
+-   :func:`box_counting_dimension`: the box-counting dimension of a silhouette's boundary (:func:`boundary`).
+-   :func:`band_energy`: the energy of a 3-D field in octave bands.
+-   :func:`thin_edge_fraction`, :func:`speck_fraction`: the shares of thin and of isolated cloud voxels.
+-   :func:`islands`: the small isolated islands of a silhouette.
 
 - Box-counting dimension of a silhouette's boundary (Mandelbrot; Lovejoy 1982 measured the perimeter-area
-  dimension of real cloud outlines at about 1.35, photographs' cloud masks give 1.15-1.22 at 640x480 by box
-  counting): the boundary pixels of a binary mask (inside pixels with a 4-neighbour outside) are covered with
-  boxes of side s = 2, 4, ..., 64 px; ``D = -slope`` of the least-squares line through (log s, log N(s)). A
-  smooth curve gives 1, a plane-filling one 2.
+  dimension of real cloud outlines at about 1.35): the boundary pixels of a binary mask (inside pixels with a
+  4-neighbour outside) are covered with boxes of side s = 2, 4, ..., 64 px; ``D = -slope`` of the least-squares
+  line through (log s, log N(s)). A smooth curve gives 1, a plane-filling one 2.
 - Speck fraction: the share of cloud voxels in tiny isolated components (salt-and-pepper speckle).
 - Band energy: the radial power spectrum of a 3-D field (:func:`natscene.volume.noise.radial_energy_spectrum`)
   summed over the octave band [f / sqrt(2), f * sqrt(2)) around a frequency f (cycles per longest side).
+
+References
+----------
+-   Lovejoy, S. (1982). Area-perimeter relation for rain and cloud areas. Science, 216(4542), 185–187.
+-   Mandelbrot, B. B. (1982). The Fractal Geometry of Nature. W. H. Freeman.
 """
 from __future__ import annotations
 
 import numpy as np
 
 from natscene.volume.noise import radial_energy_spectrum
+
+__all__ = ["box_counting_dimension", "boundary", "band_energy", "thin_edge_fraction", "speck_fraction", "islands"]
 
 
 def boundary(mask: np.ndarray) -> np.ndarray:

@@ -1,6 +1,14 @@
-"""Coarse cloud shapes from metaballs, and the previous smooth generator :func:`generate_smooth` (kept as the
-benchmark baseline and for the "before" previews; :mod:`natscene.volume.procedural` is the production modeller,
-which uses the blob layouts here as its coarse shape).
+"""
+Metaball clouds
+===============
+
+Defines coarse cloud shapes from metaballs, and the smooth generator :func:`generate_smooth` (the benchmark
+baseline and the "before" previews; :mod:`natscene.volume.procedural` is the production modeller, which uses the
+metaball field here for its coarse shapes):
+
+-   :func:`metaball_field`: the sum of Wyvill falloffs on a grid; :data:`THRESHOLD`: the implicit surface's
+    iso-value.
+-   :func:`generate_smooth`: a smooth procedural density grid (cumulus or cumulonimbus).
 
 The smooth generator, procedural in the style of Ebert et al. (implicit + turbulence):
 
@@ -18,6 +26,14 @@ The smooth generator, procedural in the style of Ebert et al. (implicit + turbul
 
 Everything is vectorised over the grid; the only Python loop is over the (tens of) metaballs, each
 evaluated on its own bounding sub-box.
+
+References
+----------
+-   Ebert, D. S., Musgrave, F. K., Peachey, D., & Perlin, K. (2009). Texturing and Modeling: A Procedural
+    Approach (3rd ed.). Morgan Kaufmann.
+-   Worley, S. (1996). A cellular texture basis function. Proceedings of ACM SIGGRAPH 1996, 291–294.
+-   Wyvill, G., McPheeters, C., & Wyvill, B. (1986). Data structure for soft objects. The Visual Computer, 2(4),
+    227–234.
 """
 from __future__ import annotations
 
@@ -25,6 +41,8 @@ import numpy as np
 from scipy import ndimage
 
 from natscene.volume.noise import fbm, worley_f1
+
+__all__ = ["THRESHOLD", "metaball_field", "generate_smooth"]
 
 THRESHOLD = 0.3  # iso-value of the implicit surface (a lone blob reaches it at 0.57 of its radius)
 

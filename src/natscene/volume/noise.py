@@ -1,5 +1,15 @@
-"""Procedural noise for cloud volumes in the style of Ebert et al. (Texturing & Modeling, 2003/2009):
-fractional Brownian motion (fBm) of value noise, and Worley (cellular) noise for billowy detail.
+"""
+Procedural noise
+================
+
+Defines the procedural noise of the cloud volumes in the style of Ebert et al. (Texturing & Modeling,
+2003/2009): fractional Brownian motion (fBm) of value noise, and Worley (cellular) noise for billowy detail:
+
+-   :func:`value_noise`, :func:`fbm`: one octave of value noise, and its normalised fBm.
+-   :func:`worley_f1`: Worley F1 noise.
+-   :func:`perlin_tile`, :func:`worley_tile`, :func:`worley_fbm_tile`, :func:`perlin_worley_tile`: the periodic
+    noise tiles of the production modeller (Perlin's improved noise, Worley F1, Schneider's Perlin-Worley).
+-   :func:`radial_energy_spectrum`: the energy of a 3-D field per spherical frequency shell.
 
 fBm: ``fbm(p) = sum_o gain^o * n(lacunarity^o * f0 * p) / sum_o gain^o`` with ``n`` value noise on an
 integer lattice (uniform values in [-1, 1], quintic fade ``6t^5 - 15t^4 + 10t^3`` between lattice points,
@@ -9,11 +19,23 @@ matrix products, not per-voxel work.
 
 Worley F1: distance from each voxel to the nearest of a set of jittered feature points (one per cell of
 a ``cells``-per-unit grid), computed with an exact Euclidean distance transform.
+
+References
+----------
+-   Ebert, D. S., Musgrave, F. K., Peachey, D., & Perlin, K. (2009). Texturing and Modeling: A Procedural
+    Approach (3rd ed.). Morgan Kaufmann.
+-   Perlin, K. (2002). Improving noise. ACM Transactions on Graphics, 21(3), 681–682.
+-   Schneider, A., & Vos, N. (2015). The real-time volumetric cloudscapes of Horizon: Zero Dawn. SIGGRAPH 2015
+    course Advances in Real-Time Rendering in Games.
+-   Worley, S. (1996). A cellular texture basis function. Proceedings of ACM SIGGRAPH 1996, 291–294.
 """
 from __future__ import annotations
 
 import numpy as np
 from scipy import ndimage
+
+__all__ = ["value_noise", "fbm", "worley_f1", "perlin_tile", "worley_tile", "worley_fbm_tile",
+           "perlin_worley_tile", "radial_energy_spectrum"]
 
 
 def _fade(t: np.ndarray) -> np.ndarray:

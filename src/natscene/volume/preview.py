@@ -1,4 +1,12 @@
-"""Volume previews: the rendered look beside the optical depth projected along two axes.
+"""
+Volume previews
+===============
+
+Defines the volume previews: the rendered look beside the optical depth projected along two axes:
+
+-   :func:`preview_sheet`: the preview image (rendered look | tau front | tau top).
+-   :func:`rendered_look`: the front view lit from the side, multiple scattering by scattering octaves.
+-   :func:`optical_depth_projections`, :func:`side_by_side`: the optical depth along z and y, side by side.
 
 - tau(x, y) = extinction_scale * sum_z rho * dz (that is, at sigma_t = 1) along z (front) and along y (top),
   stored in preview.exr and shown as grey-scale maps of 1 - exp(-tau / 20).
@@ -6,12 +14,18 @@
   scattering approximated by Wrenninge's scattering octaves (sigma_t = 0.5: a mean optical depth of 30 along
   z), the sky above and behind. A preview, not the fitted renderer.
 - :func:`lit_side_by_side`: the former quick look (single scattering by cumulative sums along the grid axes).
+
+References
+----------
+-   Wrenninge, M., Kulla, C., & Lundqvist, V. (2013). Oz: the great and volumetric. SIGGRAPH 2013 Talks.
 """
 from __future__ import annotations
 
 import numpy as np
 
 from natscene.phase import hg
+
+__all__ = ["preview_sheet", "rendered_look", "optical_depth_projections", "side_by_side"]
 
 SKY = np.array([0.18, 0.32, 0.62], np.float32)  # linear sRGB of a mid-blue sky
 

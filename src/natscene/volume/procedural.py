@@ -1,4 +1,14 @@
-"""The production cloud modeller: a coarse shape eroded and displaced by multi-octave Perlin-Worley noise.
+"""
+Procedural cloud modeller
+=========================
+
+Defines the production cloud modeller: a coarse shape eroded and displaced by multi-octave Perlin-Worley noise:
+
+-   :func:`generate`: a procedural density grid of a kind (:data:`KINDS`).
+-   :func:`shape_params`: a kind's parameters (:class:`Shape`) with overrides.
+-   :func:`octave_weights`: the band limit of the displacement fBm.
+-   :func:`despeckle`: remove isolated specks.
+-   :func:`statistics`: the summary numbers of a grid for meta.yaml.
 
 The method of production cloud tools, after Schneider's Nubis ("The real-time volumetric cloudscapes of Horizon:
 Zero Dawn", SIGGRAPH 2015 course; "Nubis: authoring real-time volumetric cloudscapes", 2017) and Wrenninge's
@@ -28,6 +38,15 @@ Steps 2-5 run in one compiled kernel (numba, ``prange`` over z slices) that read
 grid and four 64^3 periodic noise tiles (:mod:`natscene.volume.noise`), so memory is the output grid alone
 (float32; 4 GiB at 1024^3) and the grid is filled in z chunks. Every voxel is computed independently: the same
 seed gives the same bytes whatever the thread count.
+
+References
+----------
+-   Schneider, A. (2017). Nubis: authoring real-time volumetric cloudscapes with the Decima engine. SIGGRAPH 2017
+    course Advances in Real-Time Rendering in Games.
+-   Schneider, A., & Vos, N. (2015). The real-time volumetric cloudscapes of Horizon: Zero Dawn. SIGGRAPH 2015
+    course Advances in Real-Time Rendering in Games.
+-   Wrenninge, M. (2012). Production Volume Rendering: Design and Implementation. CRC Press.
+-   Wrenninge, M., et al. (2011). Production volume rendering. SIGGRAPH 2011 course.
 """
 from __future__ import annotations
 
@@ -39,6 +58,8 @@ from scipy import ndimage
 
 from natscene.volume import shapes
 from natscene.volume.noise import perlin_tile, perlin_worley_tile, worley_fbm_tile
+
+__all__ = ["KINDS", "generate", "Shape", "shape_params", "octave_weights", "despeckle", "statistics"]
 
 KINDS = ("cumulus", "cumulonimbus", "stratocumulus", "cumulus_field")
 COARSE_MAX = 128        # longest side of the coarse shape grid

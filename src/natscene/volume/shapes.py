@@ -1,4 +1,11 @@
-"""Coarse cloud shapes of the production modeller (:mod:`natscene.volume.procedural`), on a coarse grid.
+"""
+Coarse cloud shapes
+===================
+
+Defines the coarse cloud shapes of the production modeller (:mod:`natscene.volume.procedural`), on a coarse grid:
+
+-   :func:`cumulus`, :func:`cumulonimbus`, :func:`field` (``cumulus_field``), :func:`stratocumulus`: the
+    builders, each returning a :class:`Coarse`.
 
 Each builder returns a :class:`Coarse`: the inside/outside of the low-frequency body, and three per-voxel factors
 the fine kernel reads, ``amp`` (scales the pyroclastic displacement: billowy turrets 1, a smooth anvil less, a
@@ -23,6 +30,16 @@ for an anvil, a ceiling. All lengths are box units (the longest side of the box 
 - ``stratocumulus``: a layer broken into closed convective cells (Rayleigh-Benard-like; Agee 1984): a 2-D
   Worley F2 - F1 field is high in the cells and low on the lanes between them; cloud where it is above the
   ``1 - coverage`` quantile, the top domed in each cell's middle, each cell a little thicker or thinner.
+
+References
+----------
+-   Agee, E. M. (1984). Observations from space and thermal convection: a historical perspective. Bulletin of
+    the American Meteorological Society, 65(9), 938–949.
+-   Benner, T. C., & Curry, J. A. (1998). Characteristics of small tropical cumulus clouds and their impact on
+    the environment. Journal of Geophysical Research, 103(D22), 28753–28767.
+-   Plank, V. G. (1969). The size distribution of cumulus clouds in representative Florida populations. Journal
+    of Applied Meteorology, 8(1), 46–67.
+-   World Meteorological Organization. International Cloud Atlas. https://cloudatlas.wmo.int
 """
 from __future__ import annotations
 
@@ -32,6 +49,8 @@ import numpy as np
 from scipy import ndimage
 
 from natscene.volume import metaballs
+
+__all__ = ["Coarse", "cumulus", "cumulonimbus", "field", "stratocumulus"]
 
 THRESHOLD = metaballs.THRESHOLD
 

@@ -1,4 +1,12 @@
-"""OpenVDB in and out: natscene density grids as ``.vdb`` files (a float fog-volume grid, ``density`` by default).
+"""
+OpenVDB in and out
+==================
+
+Defines natscene density grids as ``.vdb`` files (a float fog-volume grid, ``density`` by default):
+
+-   :func:`write_vdb`, :func:`read_vdb`, :func:`list_grids`: write a grid, read a float grid, list a file's grids.
+-   :func:`content_uuid`: replace a file's random UUID by a name-based one (reproducible bytes).
+-   :func:`backend`: which OpenVDB binding serves this process (in-process or a separate program).
 
 The library is the OpenVDB project's own (ASWF OpenVDB, the reference implementation that Houdini, Blender,
 EmberGen and the Disney cloud data set use), through its Python binding. Which one:
@@ -9,7 +17,7 @@ EmberGen and the Disney cloud data set use), through its Python binding. Which o
   interpreter in ``NATSCENE_VDB_PYTHON``), running :mod:`natscene.volume.vdb_worker` as a separate program.
   That binding cannot load in the project's virtual environment: it is built with Boost.Python against
   Debian's NumPy 1.24, and the environment has NumPy 2 (the CPython 3.11 ABI itself would match), so the grid
-  travels through a temporary ``.npy`` file (about 0.2 s for a 194x122x194 grid).
+  travels through a temporary ``.npy`` file (its cost: docs/stages/volume.md, "OpenVDB").
 
 ``tools/setup.sh`` installs ``python3-openvdb`` with apt-get when neither is found. Values are written with
 tolerance 0 (lossless float32; zero voxels stay inactive background) and the transform is linear and
@@ -19,6 +27,12 @@ Reproducible bytes: the library stamps every file it writes with a fresh random 
 readers use it only to tell files apart, e.g. for delayed loading). :func:`write_vdb` replaces it with a
 name-based UUID (RFC 4122 version 5) of the file's other bytes, so the same grid gives the same file on every
 run and two different grids still get different UUIDs.
+
+References
+----------
+-   Leach, P., Mealling, M., & Salz, R. (2005). A Universally Unique IDentifier (UUID) URN Namespace. RFC 4122.
+-   Museth, K. (2013). VDB: high-resolution sparse volumes with dynamic topology. ACM Transactions on Graphics,
+    32(3).
 """
 from __future__ import annotations
 
@@ -36,6 +50,8 @@ import numpy as np
 
 from natscene.errors import InputError
 from natscene.io import atomic_path
+
+__all__ = ["write_vdb", "read_vdb", "list_grids", "content_uuid", "backend"]
 
 WORKER = Path(__file__).with_name("vdb_worker.py")
 

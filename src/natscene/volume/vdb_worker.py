@@ -1,4 +1,13 @@
-"""OpenVDB grid I/O through the OpenVDB library's own Python binding (``pyopenvdb``, or ``openvdb`` >= 11).
+"""
+OpenVDB worker
+==============
+
+Defines the OpenVDB grid I/O through the OpenVDB library's own Python binding (``pyopenvdb``, or ``openvdb``
+>= 11):
+
+-   :func:`binding`: the OpenVDB Python module.
+-   :func:`write`, :func:`read`, :func:`list_grids`: write a float grid, read one, list a file's grids.
+-   :func:`main`: the command line below.
 
 Runs in-process where the binding imports, else as a separate program under a Python that has it
 (Debian's ``python3-openvdb`` for ``/usr/bin/python3``; see :mod:`natscene.volume.vdb`): this file imports
@@ -19,6 +28,8 @@ import json
 import sys
 
 import numpy as np
+
+__all__ = ["binding", "write", "read", "list_grids", "main"]
 
 
 def binding():

@@ -1,5 +1,11 @@
-"""Dong 2007's reaction-diffusion update, Eq. 3.5, stepped explicitly (§3.3.2): :func:`eq35_step` is one step,
-:func:`simulate_explicit` runs it on a petal until the pattern is stable.
+"""
+Explicit reaction-diffusion update
+==================================
+
+Defines Dong's (2007) reaction-diffusion update, Eq. 3.5, stepped explicitly (§3.3.2):
+
+-   :func:`eq35_step`: one step of Eq. 3.5 on the petal cells, with the operators of :class:`Eq35Operators`.
+-   :func:`simulate_explicit`: Eq. 3.5 stepped on a petal until the pattern is stable.
 
 Time stepping: Euler on Eq. 3.5 (dt = 1 is the paper's "Delta A per iteration"), float32, with the
 reaction linearised per cell on its own species (semi-implicit, diagonal: the update of a is divided by
@@ -17,6 +23,10 @@ m = ceil(dt * D * 2 max|diag L_v|) so each sub-step satisfies the same bound.
 
 Convergence ("a stable pattern"): the max relative change per unit time,
 max |u^{n+1} - u^n| / (dt * max|u^n|) over both species, checked every ``check_every`` steps, < tol.
+
+References
+----------
+-   Dong, W. (2007). Rendering Algorithms for Natural Scenes. PhD thesis, Université Henri Poincaré - Nancy I.
 """
 from __future__ import annotations
 
@@ -29,6 +39,8 @@ from natscene.patterns.reaction_diffusion.laplacian import assemble, laplacian_e
 from natscene.patterns.reaction_diffusion.parameters import RDParams
 from natscene.patterns.reaction_diffusion.stability import reaction_stable, stable_dt
 from natscene.patterns.reaction_diffusion.state import RDResult, initial_state, on_grid
+
+__all__ = ["Eq35Operators", "eq35_step", "simulate_explicit"]
 
 
 class Eq35Operators(NamedTuple):

@@ -1,9 +1,26 @@
-"""Dong 2007's Eq. 3.5 by an unconditionally stable scheme (§3.3.2; ``scheme: implicit``): Strang splitting
-of implicit diffusion and implicit-Euler kinetics, iterated to the stable pattern with Anderson acceleration.
+"""
+Implicit reaction-diffusion scheme
+==================================
+
+Defines Dong's (2007) Eq. 3.5 by an unconditionally stable scheme (§3.3.2; ``scheme: implicit``): Strang
+splitting of implicit diffusion and implicit-Euler kinetics, iterated to the stable pattern with Anderson
+acceleration:
+
+-   :func:`simulate_implicit`: Eq. 3.5 by Strang splitting on a petal until stable.
+-   :func:`iterate_implicit`: the Strang-split iteration; :func:`strang_step`: one step of it.
+-   :func:`react_implicit`: implicit Euler on the local kinetics.
+-   :func:`anderson_mix`: Anderson acceleration of the fixed-point map.
 
 For slow kinetics (the Fig. 3.3 presets, reaction lengths of tens of cells) the explicit update
-(:mod:`natscene.patterns.reaction_diffusion.explicit`) needs ~1e5 steps; here dt can be a sizeable fraction of
-1 / (S K_A) and the pattern settles in tens of steps. Its ``tol`` applies to the relative change per step.
+(:mod:`natscene.patterns.reaction_diffusion.explicit`) needs very many small steps; here dt can be a sizeable
+fraction of 1 / (S K_A) and the pattern settles in tens of steps. Its ``tol`` applies to the relative change per
+step.
+
+References
+----------
+-   Dong, W. (2007). Rendering Algorithms for Natural Scenes. PhD thesis, Université Henri Poincaré - Nancy I.
+-   Walker, H. F., & Ni, P. (2011). Anderson acceleration for fixed-point iterations. SIAM Journal on Numerical
+    Analysis, 49(4), 1715–1735.
 """
 from __future__ import annotations
 
@@ -14,6 +31,8 @@ from natscene.errors import InputError
 from natscene.patterns.reaction_diffusion.laplacian import assemble, laplacian_edges
 from natscene.patterns.reaction_diffusion.parameters import RDParams
 from natscene.patterns.reaction_diffusion.state import RDResult, initial_state, on_grid
+
+__all__ = ["react_implicit", "strang_step", "anderson_mix", "iterate_implicit", "simulate_implicit"]
 
 
 def react_implicit(a, b, dt, sa, sb, ka, kb, beta, iters=4):

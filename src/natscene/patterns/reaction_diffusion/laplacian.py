@@ -1,4 +1,13 @@
-"""The transport and the modified Laplacian of Dong 2007 §3.3.2 (Eqs. 3.1, 3.4, 3.4').
+"""
+Transport and modified Laplacian
+================================
+
+Defines the transport and the modified Laplacian of Dong (2007, §3.3.2, Eqs. 3.1, 3.4, 3.4'):
+
+-   :func:`transport`: Eq. 3.1, the transport I between two cells.
+-   :func:`laplacian`: the modified Laplacian of Eq. 3.4' as a sparse matrix over the petal cells.
+-   :func:`laplacian_edges`: its edge lists, mesophyll and vascular parts; :func:`assemble`: a part as a sparse
+    matrix.
 
 Transport (Eq. 3.1): between two cells a, b at distance ||a, b||,
 I = p_mm/||a,b|| (both mesophyll), p_mv w/||a,b|| (one vascular, vein width w),
@@ -23,6 +32,10 @@ cell of every path). Cells outside the petal are not in the graph: no flux cross
 The edges come in two parts (:func:`laplacian_edges`): the mesophyll part L_m (edges between two mesophyll
 cells) and the vascular part L_v (every edge touching a vascular cell, including the non-adjacent links), which
 the explicit scheme steps separately.
+
+References
+----------
+-   Dong, W. (2007). Rendering Algorithms for Natural Scenes. PhD thesis, Université Henri Poincaré - Nancy I.
 """
 from __future__ import annotations
 
@@ -31,6 +44,8 @@ import scipy.sparse as sp
 
 from natscene.patterns.reaction_diffusion.parameters import P_MM, P_MV, P_VV
 from natscene.patterns.venation import Venation
+
+__all__ = ["transport", "laplacian_edges", "assemble", "laplacian"]
 
 
 def transport(wa, wb, va, vb, p_mm=P_MM, p_mv=P_MV, p_vv=P_VV, dist=1.0):

@@ -1,12 +1,25 @@
-"""Linear (Turing) stability theory of Eq. 3.5 (Dong 2007 §3.3.2; Murray 2003, Ch. 2): the growth rate of a
-perturbation of wavenumber q about the homogeneous steady state, the wavelength of the fastest-growing mode, and
-the dominant wavelength measured on a simulated field (the tests compare the two).
+"""
+Linear stability theory of the reaction-diffusion
+=================================================
+
+Defines the linear (Turing) stability theory of Eq. 3.5 (Dong 2007, §3.3.2; Murray 2003, Ch. 2):
+
+-   :func:`growth_rate`: the growth rate of a perturbation of wavenumber q about the homogeneous steady state.
+-   :func:`fastest_wavelength`: the wavelength of the fastest-growing mode.
+-   :func:`dominant_wavelength`: the dominant wavelength of a simulated field (the tests compare the two).
+
+References
+----------
+-   Dong, W. (2007). Rendering Algorithms for Natural Scenes. PhD thesis, Université Henri Poincaré - Nancy I.
+-   Murray, J. D. (2003). Mathematical Biology, Volume II: Spatial Models and Biomedical Applications. Springer.
 """
 from __future__ import annotations
 
 import numpy as np
 
 from natscene.patterns.reaction_diffusion.parameters import RDParams
+
+__all__ = ["growth_rate", "fastest_wavelength", "dominant_wavelength"]
 
 
 def growth_rate(p: RDParams, q: np.ndarray) -> np.ndarray:

@@ -1,9 +1,23 @@
-"""Pigment distribution maps (Dong 2007 §3.3.2): concentrations C on the petal to normalised maps c in [0, 1]."""
+"""
+Pigment distribution maps
+=========================
+
+Defines the pigment distribution maps of Dong (2007, §3.3.2): concentrations C on the petal to normalised maps
+c in [0, 1].
+
+-   :func:`normalise`: the map of a concentration field.
+
+References
+----------
+-   Dong, W. (2007). Rendering Algorithms for Natural Scenes. PhD thesis, Université Henri Poincaré - Nancy I.
+"""
 from __future__ import annotations
 
 import numpy as np
 
 from natscene.errors import InputError
+
+__all__ = ["normalise"]
 
 
 def normalise(conc: np.ndarray, mask: np.ndarray, c0: float | None = None, mode: str = "max") -> np.ndarray:

@@ -1,5 +1,14 @@
-"""Parameters of Dong 2007's reaction-diffusion (§3.3.2, Tables 3.1-3.3): the Schnakenberg kinetics of Eq. 3.3 in
-the discrete form of Eq. 3.5 for pigment concentrations a, b,
+"""
+Parameters of the reaction-diffusion
+====================================
+
+Defines the parameters of Dong's (2007) reaction-diffusion (§3.3.2, Tables 3.1-3.3):
+
+-   :class:`RDParams`: the parameters of Eq. 3.5, with the steady state and the Jacobian.
+-   :func:`schnakenberg_constants`: K_A, K_B, beta for Murray's non-dimensional Schnakenberg kinetics.
+-   :data:`P_MM`, :data:`P_MV`, :data:`P_VV`: the transport weights of Eq. 3.1.
+
+The Schnakenberg kinetics of Eq. 3.3 in the discrete form of Eq. 3.5 for pigment concentrations a, b,
 
     dA = S_A (a^2 b - K_A a + beta) + D_A l^(a)
     dB = S_B (1 - K_B a^2 b)        + D_B l^(b)
@@ -7,12 +16,19 @@ the discrete form of Eq. 3.5 for pigment concentrations a, b,
 with the homogeneous steady state a* = (beta + 1/K_B) / K_A, b* = 1 / (K_B a*^2); the transport weights
 p_mm, p_mv, p_vv of Eq. 3.1; the vein-root supply; the time stepping and convergence settings. The update itself:
 :func:`natscene.patterns.reaction_diffusion.explicit.eq35_step`.
+
+References
+----------
+-   Dong, W. (2007). Rendering Algorithms for Natural Scenes. PhD thesis, Université Henri Poincaré - Nancy I.
+-   Murray, J. D. (2003). Mathematical Biology, Volume II: Spatial Models and Biomedical Applications. Springer.
 """
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass
 
 import numpy as np
+
+__all__ = ["P_MM", "P_MV", "P_VV", "RDParams", "schnakenberg_constants"]
 
 P_MM, P_MV, P_VV = 1.0, 2.0, 10.0
 

@@ -1,7 +1,17 @@
-"""Dong 2007's reaction-diffusion on a petal (§3.3.2, Eq. 3.5): check the parameters, then run the scheme they
-ask for: :func:`~natscene.patterns.reaction_diffusion.explicit.simulate_explicit` (the paper's per-iteration
-update, :func:`~natscene.patterns.reaction_diffusion.explicit.eq35_step`) or
-:func:`~natscene.patterns.reaction_diffusion.implicit.simulate_implicit` (Strang splitting).
+"""
+Reaction-diffusion on a petal
+=============================
+
+Defines the entry point of Dong's (2007) reaction-diffusion on a petal (§3.3.2, Eq. 3.5):
+
+-   :func:`simulate`: check the parameters, then run the scheme they ask for:
+    :func:`~natscene.patterns.reaction_diffusion.explicit.simulate_explicit` (the paper's per-iteration update,
+    :func:`~natscene.patterns.reaction_diffusion.explicit.eq35_step`) or
+    :func:`~natscene.patterns.reaction_diffusion.implicit.simulate_implicit` (Strang splitting).
+
+References
+----------
+-   Dong, W. (2007). Rendering Algorithms for Natural Scenes. PhD thesis, Université Henri Poincaré - Nancy I.
 """
 from __future__ import annotations
 
@@ -13,6 +23,8 @@ from natscene.patterns.reaction_diffusion.implicit import simulate_implicit
 from natscene.patterns.reaction_diffusion.parameters import RDParams
 from natscene.patterns.reaction_diffusion.state import RDResult
 from natscene.patterns.venation import Venation
+
+__all__ = ["simulate"]
 
 
 def simulate(mask: np.ndarray, venation: Venation | None, p: RDParams, init=None, logger=None,

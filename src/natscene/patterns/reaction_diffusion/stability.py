@@ -1,17 +1,30 @@
-"""Linear stability of the explicit (semi-implicit reaction) update of Eq. 3.5 (Dong 2007 §3.3.2) at the
-homogeneous steady state: the per-step amplification matrix and the largest stable time step.
+"""
+Stability of the explicit reaction-diffusion update
+===================================================
+
+Defines the linear stability of the explicit (semi-implicit reaction) update of Eq. 3.5 (Dong 2007, §3.3.2) at
+the homogeneous steady state:
+
+-   :func:`amplification`: the per-step amplification matrix.
+-   :func:`stable_dt`: the largest stable time step; :func:`reaction_stable`: whether a time step is stable.
 
 The reaction is linearised per cell on its own species (the update of a is divided by
 1 + dt max(-dR_a/da, 0) = 1 + dt max(S_A (K_A - 2ab), 0), that of b by 1 + dt S_B K_B a^2), so stiff kinetics
 such as K_B ~ 1e8 no longer force dt ~ 1e-6. The step is accepted when the spectral radius of the linearised
 update is <= 1, or <= exp(dt max Re lambda(J)) where the kinetics themselves grow. (The diffusion limits of the
 explicit scheme are checked where it is set up, :func:`natscene.patterns.reaction_diffusion.explicit.simulate_explicit`.)
+
+References
+----------
+-   Dong, W. (2007). Rendering Algorithms for Natural Scenes. PhD thesis, Université Henri Poincaré - Nancy I.
 """
 from __future__ import annotations
 
 import numpy as np
 
 from natscene.patterns.reaction_diffusion.parameters import RDParams
+
+__all__ = ["amplification", "reaction_stable", "stable_dt"]
 
 
 def amplification(p: RDParams, dt: float | None = None) -> np.ndarray:

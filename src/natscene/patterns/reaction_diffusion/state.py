@@ -1,5 +1,11 @@
-"""The state of Dong 2007's reaction-diffusion (§3.3.2) on the petal cells: the initial state and the vein-root
-supply, the result on the (H, W) grid.
+"""
+State of the reaction-diffusion
+===============================
+
+Defines the state of Dong's (2007) reaction-diffusion (§3.3.2) on the petal cells:
+
+-   :func:`initial_state`: the initial state and the vein-root supply.
+-   :class:`RDResult`: the result on the (H, W) grid; :func:`on_grid`: cell values back on the grid.
 
 Hormone supply. The pigment composition is "controlled by some key hormones ... composed in reproduction
 organs ... and then transported all over the petal by the vascular system" (§3.1). The vein root (the
@@ -7,12 +13,18 @@ petal base, next to the reproductive organs) is therefore held at a supply state
 root_supply * (a*, b*) (Dirichlet condition at the root cell); with root_supply = (1, 1) and no noise
 the uniform steady state is an exact solution, so every pattern comes from the supply, the venation, the
 petal shape and (for Turing-unstable parameters) the initial noise.
+
+References
+----------
+-   Dong, W. (2007). Rendering Algorithms for Natural Scenes. PhD thesis, Université Henri Poincaré - Nancy I.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 
 import numpy as np
+
+__all__ = ["RDResult", "initial_state", "on_grid"]
 
 
 @dataclass

@@ -1,10 +1,20 @@
-"""Transport ``all_orders`` (the default): every scattering order of the sun's light and the skylight, in bands.
+"""
+Transport ``all_orders``
+========================
+
+Defines the default transport: every scattering order of the sun's light and the skylight, in bands (the
+remedies of Dobashi et al. 2012, §7; Bouthors et al. 2008):
+
+-   :class:`AllOrders`: the transport model (precompute, composition, direct render).
+-   :func:`skylight_dome`, :func:`frame_dome`: the sky dome of the precompute and of a frame.
+-   :func:`sky_luminance_weights`, :func:`composed_halves`, :func:`node_noise`, :func:`target_figure`,
+    :data:`NOISE_BETAS`: a node's composed noise and the figure its noise target is checked against.
 
 Dobashi 2012 truncates multiple scattering at order 4 and adds a constant ambient term (§3); his §7 names the
 remedies, clustering the high orders into sets (Bouthors et al. 2008) and the skylight as a light source. This
 transport traces every order of the sun's light and of a sky dome's (:mod:`natscene.scatter.allorders`,
 :mod:`natscene.scatter.photons`) into bands of orders whose albedo dependence is closed-form
-(:mod:`natscene.scatter.bands`), so the GA composes any beta in milliseconds:
+(:mod:`natscene.scatter.bands`), so the GA composes any beta without tracing again:
 
     L_c  = c_in L_in [beta p(θ_q, g) S_sun + Σ_b c_b(beta) T_b^sun]
            + Σ_b c'_b(beta) [a ⊙ T_b^{sky,RGB} + G T_b^{ground}] + T L_sky,
@@ -14,6 +24,14 @@ with the sky dome's R, G, B channels and a unit-radiance ground, c_b(beta) the b
 calibration to the photo (:func:`natscene.scatter.skylight.calibration`), E_dome its horizontal irradiance and G
 the radiance of a Lambertian ground of ``ground_albedo``; interpolated bilinearly in the extinction and g between
 the tables' nodes. The GA searches L_in, g, the extinction and beta; the skylight replaces L_amb.
+
+References
+----------
+-   Bouthors, A., Neyret, F., Max, N., Bruneton, E., & Crassin, C. (2008). Interactive multiple anisotropic
+    scattering in clouds. Proceedings of the 2008 Symposium on Interactive 3D Graphics and Games, 173–182.
+-   Dobashi, Y., Iwasaki, W., Ono, A., Yamamoto, T., Yue, Y., & Nishita, T. (2012). An inverse problem approach
+    for automatically adjusting the parameters for rendering clouds using photographs. ACM Transactions on
+    Graphics, 31(6).
 """
 from __future__ import annotations
 
@@ -42,29 +60,31 @@ _KERNEL = None
 _CHUNK = 1024
 
 
-def frame_dome(sun_dir, sky_settings: dict | None):
-    """The dome that lights a frame's cloud: the shot's Preetham sky for this sun (or a constant colour)."""
+def frame_dome(sun_dir, sky_settings):
+    """The dome that lights a frame's cloud: the shot's Preetham sky for this sun (or a constant colour);
+    ``sky_settings``: a validated ``shots.<name>.sky`` or its :class:`natscene.sky.daylight.Skylight`."""
     from natscene.scatter.skylight import Dome, daylight_dome
-    s = dict(sky_settings or {})
-    if s.get("model", "preetham") == "constant":
-        c = np.asarray(s.get("color", [0.3, 0.45, 0.8]), np.float64)
+    from natscene.sky.daylight import skylight
+    s = skylight(sky_settings)
+    if s.model == "constant":
+        c = np.asarray(s.color, np.float64)
         return Dome(np.broadcast_to(c, (8, 16, 3)).copy(), np.zeros(3))
-    return daylight_dome(sun_dir, s.get("turbidity", 3.0), s.get("zenith_luminance", 0.3),
-                         s.get("reference_elevation", 35.0))
+    return daylight_dome(sun_dir, s)
 
 
 
 NOISE_BETAS = (0.9, 0.99, 0.999)
 
 
-def skylight_dome(sun_dir, sky: dict | None):
-    """The sky dome that lights the cloud for the precompute and its settings (``precompute.skylight``)."""
+def skylight_dome(sun_dir, sky):
+    """The sky dome that lights the cloud for the precompute and its settings (``precompute.skylight``, validated,
+    or its :class:`natscene.sky.daylight.Skylight`)."""
     from natscene.scatter.skylight import daylight_dome
-    sky = dict(sky or {})
-    model = sky.get("model", "preetham")
-    if model != "preetham":
-        raise InputError(f"config key 'precompute.skylight.model': unknown sky model {model!r} (preetham)")
-    return daylight_dome(sun_dir, float(sky.get("turbidity", 3.0)))
+    from natscene.sky.daylight import skylight
+    s = skylight(sky, "precompute.skylight")
+    if s.model != "preetham":
+        raise InputError(f"config key 'precompute.skylight.model': unknown sky model {s.model!r} (preetham)")
+    return daylight_dome(sun_dir, s)
 
 
 def sky_luminance_weights(sun_dir, dome) -> np.ndarray:
@@ -129,7 +149,8 @@ def _multiple(volume, camera, sun_dir, sigmas, gs, settings, sky, seed, log, sin
     :func:`natscene.scatter.single.march_view` of the grid)."""
     from natscene.scatter.allorders import Lighting, Scene, view_images
     from natscene.scatter.skylight import irradiance
-    from natscene.sky.daylight import preetham_rgb
+    from natscene.sky.daylight import preetham_rgb, skylight
+    sky = skylight(sky, "precompute.skylight")
     dome = skylight_dome(sun_dir, sky)
     scene = Scene(volume, Lighting(np.asarray(sun_dir, np.float64), dome), settings)
     H, W = camera.height, camera.width
@@ -174,12 +195,13 @@ def _multiple(volume, camera, sun_dir, sigmas, gs, settings, sky, seed, log, sin
             f"{vi.stats.get('sky_photons', 0)} sky photons (budget x{scales[-1]:.2f}; {n + 1}/{len(todo)}, {el:.0f} s, "
             f"about {el / (n + 1) * (len(todo) - n - 1):.0f} s left)")
     dirs = camera.ray_directions()
-    view_rgb = preetham_rgb(dirs.reshape(-1, 3), sun_dir, float((sky or {}).get("turbidity", 3.0))).reshape(-1, 3)
+    view_rgb = preetham_rgb(dirs.reshape(-1, 3), sun_dir, sky.turbidity, sky.zenith_luminance, sky.reference_elevation,
+                            sky.min_view_elevation).reshape(-1, 3)
     s = np.asarray(sun_dir, np.float64)
     meta = {
         "sun_bands": [[a, e] for a, e in sb], "sky_bands": [[a, e] for a, e in kb],
         "sun_ratios": np.round(sun_r, 6).tolist(), "sky_ratios": np.round(sky_r, 6).tolist(),
-        "skylight": {"model": "preetham", "turbidity": float((sky or {}).get("turbidity", 3.0)),
+        "skylight": {"model": "preetham", "turbidity": float(sky.turbidity),
                      "view_mean_rgb": view_rgb.mean(0).tolist(), "irradiance_rgb": irradiance(dome).tolist(),
                      "sun_elevation_sin": float(s[1] / np.linalg.norm(s))},
         "photons": counts, "truncated_light": float(truncated),
@@ -380,16 +402,17 @@ class AllOrders(Transport):
         return [sun, sky]
 
     def values_per_node(self, section: dict) -> int:
-        ao = section.get("all_orders") or {}
-        return len(ao.get("sun_bands") or [0] * 8) + 4 * len(ao.get("sky_bands") or [0] * 3)
+        from natscene.scatter.bands import SKY_BANDS, SUN_BANDS
+        return len(SUN_BANDS) + 4 * len(SKY_BANDS)      # the bands are not configurable
 
     def memory_model(self, rule: str) -> str:
         return f"{rule}_all_orders" if rule in ("precompute", "fit", "render_frame") else rule
 
     def precompute(self, volume, med, camera, sigmas, gs, single, *, settings=None, skylight=None, n_m=4,
                    spp=256, seed=0, batch_spp=None, with_error=True, log=None):
+        from natscene.config import default_settings
         from natscene.scatter.allorders import AllOrdersSettings
-        settings = settings if settings is not None else AllOrdersSettings()
+        settings = settings if settings is not None else default_settings(AllOrdersSettings)
         sun_ms, sky_ms, sun_r, sky_r, meta = _multiple(volume, camera, med.sun_dir, sigmas, gs, settings, skylight,
                                                        seed, log or (lambda msg: None), single)
         fields = {"orders": [], "sun_bands": tuple(settings.sun_bands), "sky_bands": tuple(settings.sky_bands),
@@ -435,28 +458,14 @@ class AllOrders(Transport):
         g, beta, L_in = float(p["g"][0]), float(p["beta"][0]), float(p["L_in"][0])
         c_in = p["c_in"][0].astype(np.float32)
         o = options
-        all_orders, step_voxels, supersample, seed = o.all_orders, o.step_voxels, o.supersample, o.seed
-        sun_collisions, sky_collisions, tally_rate = o.sun_collisions, o.sky_collisions, o.tally_rate
-        ground_share, camera_lobe, skylight, dome = o.ground_share, o.camera_lobe, o.skylight, o.dome
+        seed, skylight, dome = o.seed, o.skylight, o.dome
         sky_settings, ground_albedo = o.sky_settings, o.ground_albedo
         comps = {}
-        from natscene.scatter.allorders import AllOrdersSettings, Lighting, Scene, view_images
+        from natscene.scatter.allorders import Lighting, Scene, frame_settings, view_images
         from natscene.scatter.bands import band_weights
         from natscene.scatter.skylight import ground_radiance, irradiance
-        from dataclasses import replace
-        st = replace(all_orders if all_orders is not None else AllOrdersSettings(), step_voxels=step_voxels,
-                     supersample=supersample)
-        if sun_collisions is not None:
-            st.sun_collisions = int(sun_collisions)
-        if sky_collisions is not None:
-            st.sky_collisions = int(sky_collisions)
-        if tally_rate is not None:
-            st.tally_rate = float(tally_rate)
-        if ground_share is not None:
-            st.p_ground = float(ground_share)
-        st.camera_lobe = float(camera_lobe)
-        st.sun_photons_max = max(st.sun_photons_max, st.sun_collisions // 2)
-        st.sky_photons_max = max(st.sky_photons_max, st.sky_collisions // 2)
+        st = o.all_orders if o.all_orders is not None else frame_settings(
+            {"step_voxels": o.step_voxels, "supersample": o.supersample})
         if skylight:
             dome = dome if dome is not None else frame_dome(med.sun_dir, sky_settings)
         else:

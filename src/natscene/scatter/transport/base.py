@@ -1,4 +1,14 @@
-"""The interface every transport model of the cloud implements (``precompute.transport``, ``shots.<name>.render``).
+"""
+Transport interface
+===================
+
+Defines the interface every transport model of the cloud implements (``precompute.transport``,
+``shots.<name>.render``):
+
+-   :class:`Transport`: the abstract model (precompute, save and load, composition, direct render, fit parameters).
+-   :class:`Arrays`: the tables at N pixels, as the compositions read them.
+-   :class:`RenderOptions`: the options of a direct render.
+-   :func:`noise_stats`: median and 95th percentile of per-pixel noise figures.
 
 A transport is the model of the light that scatters more than once inside the cloud (Dobashi 2012 Eqs. 6-8 and
 their remedies): the rest of the cloud's image, single scattering by the ray-marched S_sun of Eq. 5, the sky seen
@@ -14,6 +24,12 @@ through the cloud (Eq. 9) and the atmosphere (Eq. 3), is common to all and lives
 
 :mod:`natscene.scatter.transport` names the models; ``dobashi`` (:mod:`.dobashi`) and ``all_orders``
 (:mod:`.all_orders`) implement them.
+
+References
+----------
+-   Dobashi, Y., Iwasaki, W., Ono, A., Yamamoto, T., Yue, Y., & Nishita, T. (2012). An inverse problem approach
+    for automatically adjusting the parameters for rendering clouds using photographs. ACM Transactions on
+    Graphics, 31(6).
 """
 from __future__ import annotations
 
@@ -53,7 +69,9 @@ class Arrays:
 @dataclass
 class RenderOptions:
     """The settings of a direct render that the transports read: :func:`natscene.scatter.render.render`'s keywords
-    (its defaults are the only ones): ``orders``, ``spp``, ``batch_spp`` (dobashi); the rest all_orders'."""
+    (its defaults are the only ones): ``orders``, ``spp``, ``batch_spp`` (dobashi); ``all_orders`` (the
+    transport's :class:`natscene.scatter.allorders.AllOrdersSettings` or None), ``sky_settings``, ``dome``,
+    ``ground_albedo`` and ``skylight`` (all_orders)."""
 
     seed: int
     step_voxels: float
@@ -61,16 +79,11 @@ class RenderOptions:
     orders: int
     spp: int
     batch_spp: int | None
-    sky_settings: dict | None
+    sky_settings: object
     dome: object
     ground_albedo: object
-    sun_collisions: int | None
-    sky_collisions: int | None
     skylight: bool
     all_orders: object
-    tally_rate: float | None
-    ground_share: float | None
-    camera_lobe: float
 
 
 class Transport(ABC):

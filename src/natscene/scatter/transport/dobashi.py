@@ -1,4 +1,10 @@
-"""Transport ``dobashi``: the paper's multiple scattering, orders 2..n_m by path tracing plus the ambient term.
+"""
+Transport ``dobashi``
+=====================
+
+Defines the paper's transport: multiple scattering of orders 2..n_m by path tracing plus the ambient term:
+
+-   :class:`Dobashi`: the transport model (precompute, composition, direct render).
 
 Dobashi et al. 2012, §4.3 Eqs. 6-8: E_m^(k)(q, g, sigma_t), the light of scattering order k = 2..n_m (n_m = 4 in
 the paper) per pixel, traced with directions importance-sampled from HG(g) (:mod:`natscene.scatter.multiple`);
@@ -9,6 +15,12 @@ Eqs. 5, 8, 9) weights the orders by beta^k:
 
 interpolated linearly in the extinction and g between the tables' nodes. The GA searches L_in, g, the extinction,
 beta and L_amb (the paper's five).
+
+References
+----------
+-   Dobashi, Y., Iwasaki, W., Ono, A., Yamamoto, T., Yue, Y., & Nishita, T. (2012). An inverse problem approach
+    for automatically adjusting the parameters for rendering clouds using photographs. ACM Transactions on
+    Graphics, 31(6).
 """
 from __future__ import annotations
 
@@ -178,7 +190,7 @@ class Dobashi(Transport):
         return [[(f"E{k}", tables.multiple[ki, gi, si]) for gi in gis] for ki, k in enumerate(tables.orders)]
 
     def values_per_node(self, section: dict) -> int:
-        return max(int(section.get("n_m", 4)) - 1, 1)
+        return max(int(section["n_m"]) - 1, 1)
 
     def precompute(self, volume, med, camera, sigmas, gs, single, *, settings=None, skylight=None, n_m=4,
                    spp=256, seed=0, batch_spp=None, with_error=True, log=None):
