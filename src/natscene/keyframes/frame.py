@@ -142,7 +142,7 @@ def render_shot_frame(volume, state: dict, shot: dict, mie: dict | None = None, 
     timings["sky_s"] = time.perf_counter() - t
     t = time.perf_counter()
     r = shot["render"]
-    all_orders = frame_settings(r) if r["transport"] == "all_orders" else None
+    all_orders = frame_settings(r)  # the all-orders transport's settings (the dobashi model reads none of them)
     raw, comp = render(volume, camera, sun, p, sky, orders=r["orders"], spp=r["spp"], seed=r["seed"],
                        step_voxels=r["step_voxels"], supersample=r["supersample"], return_components=True,
                        transport=r["transport"], sky_settings=sky_settings, ground_albedo=r["ground_albedo"],
