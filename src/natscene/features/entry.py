@@ -19,9 +19,12 @@ References
 """
 from __future__ import annotations
 
+from dataclasses import replace
+
 import cv2
 import numpy as np
 
+from natscene.color import srgb_to_linear
 from natscene.config import settings_from_section
 from natscene.errors import InputError
 from natscene.features.colour import region_stats, segment
@@ -56,7 +59,6 @@ def analyse(srgb: np.ndarray, cfg: dict, mask: np.ndarray | None, labels: np.nda
         regions = segment(np.clip(np.round(srgb * 255), 0, 255).astype(np.uint8), c["spatial_radius"],
                           c["colour_radius"], c["min_region"], c["smooth"])
         out["colour"] = regions
-        from natscene.color import srgb_to_linear
         out["colour_stats"] = region_stats(srgb_to_linear(srgb), regions)
     return out
 
@@ -102,13 +104,14 @@ def target_stack(maps: dict, out_cfg: dict, size, scale_image, colour_image, key
     return (np.stack(chans, -1) if chans else None), out
 
 
+def _with_type_mode(cls, entry: dict, section: str, key: str):
+    """The settings ``cls`` of ``entry[section]`` with the entry's ``types.mode``."""
+    return replace(settings_from_section(cls, entry[section], f"{key}.{section}"), type_mode=entry["types"]["mode"])
+
+
 def optimisation_settings(entry: dict, key: str) -> OptimisationSettings:
-    from dataclasses import replace
-    s = settings_from_section(OptimisationSettings, entry["optimisation"], f"{key}.optimisation")
-    return replace(s, type_mode=entry["types"]["mode"])
+    return _with_type_mode(OptimisationSettings, entry, "optimisation", key)
 
 
 def quilting_settings(entry: dict, key: str) -> QuiltingSettings:
-    from dataclasses import replace
-    s = settings_from_section(QuiltingSettings, entry["quilting"], f"{key}.quilting")
-    return replace(s, type_mode=entry["types"]["mode"])
+    return _with_type_mode(QuiltingSettings, entry, "quilting", key)
