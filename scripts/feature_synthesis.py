@@ -9,7 +9,7 @@ import numpy as np
 from natscene import io
 from natscene.color import linear_to_srgb, srgb_to_linear
 from natscene.errors import InputError
-from natscene.features.colour import recolour_regions, transfer_to_largest
+from natscene.features.colour import recolour_regions, region_colours, transfer_to_largest
 from natscene.features.entry import feature_stack, optimisation_settings, quilting_settings, target_stack
 from natscene.features.maps import resample_labels
 from natscene.features.optimisation import synthesise
@@ -45,7 +45,8 @@ def main(snakemake, log):
                              f"('{key}.types.labels')")
     example = srgb
     consistent = entry["colour"]["transfer_to_largest"] and maps["colour"] is not None
-    if consistent:  # §6.5 (3): synthesise from the colour-consistent example, give the regions their colours back
+    if consistent:  # §6.5 (3), Fig. 6.15 d: synthesise from the colour-consistent example, the colour map still a
+        # feature (the regions' structure follows the target map), then give the regions their colours back
         example = linear_to_srgb(np.clip(transfer_to_largest(srgb_to_linear(srgb), maps["colour"]), 0, None))
     st = optimisation_settings(entry, key)
     t0 = time.perf_counter()
@@ -66,10 +67,13 @@ def main(snakemake, log):
     attrs.update({"lambda": st.lam} if entry["method"] == "optimisation" else {"alpha": entry["quilting"]["alpha"]})
     io.write_exr(snakemake.output.exr, srgb_to_linear(out), ["R", "G", "B"], attrs=attrs, stage="feature_synthesis")
     io.write_png(snakemake.output.png, out, encoded=True)
-    # the comparison: example | target scale (if any) | output | plain texture optimisation (lambda = 0)
-    panels = [srgb, out]
+    # the comparison: example | target scale, colour map (if any) | output | plain texture optimisation (lambda 0)
+    panels = [srgb]
     if "scale" in targets:
-        panels.insert(1, np.repeat(scale_preview(targets["scale"])[..., None], 3, -1))
+        panels.append(np.repeat(scale_preview(targets["scale"])[..., None], 3, -1))
+    if "colour" in targets:
+        panels.append(linear_to_srgb(region_colours(targets["colour"], stats)))
+    panels.append(out)
     if out_cfg["baseline"]:
         base = synthesise(example, (H, W), None, None, replace(st, lam=0.0))  # no feature, no type
         panels.append(base.image)

@@ -4,15 +4,11 @@ import numpy as np
 from natscene import io
 from natscene.color import linear_to_srgb
 from natscene.errors import InputError
+from natscene.features.colour import region_colours
 from natscene.features.entry import analyse, working_image
 from natscene.features.scale import scale_preview
 from natscene.features.type_map import type_preview
 from natscene.runner import run
-
-
-def _palette(labels: np.ndarray) -> np.ndarray:
-    rng = np.random.default_rng(7)
-    return rng.uniform(0.15, 0.95, (int(labels.max()) + 1, 3))[labels]
 
 
 def main(snakemake, log):
@@ -62,7 +58,7 @@ def main(snakemake, log):
         tiles.append(np.repeat(type_preview(maps["types"])[..., None], 3, -1))
         log.info(f"type map: types {sorted(np.unique(maps['types']).tolist())}")
     if maps["colour"] is not None:
-        tiles.append(_palette(maps["colour"]))
+        tiles.append(linear_to_srgb(region_colours(maps["colour"], maps["colour_stats"])))
         log.info(f"colour map: {int(maps['colour'].max()) + 1} regions")
     gap = np.ones((h, 4, 3))
     sheet = np.concatenate([x for t in tiles for x in (t, gap)][:-1], 1)

@@ -61,7 +61,7 @@ rule feature_synthesis:
         exr=f"{RESULTS}/textures/{{name}}/synth.exr",
         png=f"{RESULTS}/textures/{{name}}/synth.png",
         compare=report(f"{RESULTS}/textures/{{name}}/compare.png", category="Textures", subcategory="{name}",
-                       labels={"texture": "{name}", "image": "example | target scale | output | lambda 0"}),
+                       labels={"texture": "{name}", "image": "example | target scale, colour map | output | lambda 0"}),
     input:
         unpack(_synthesis_inputs),
     params:

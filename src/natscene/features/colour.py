@@ -7,6 +7,7 @@ transfer:
 
 -   :func:`segment`: the colour regions of an image by mean shift.
 -   :func:`region_stats`: each region's size, mean and standard deviation in l-alpha-beta.
+-   :func:`region_colours`: a colour map drawn in its regions' mean colours (the previews of Fig. 6.9 c, 6.15 c).
 -   :func:`transfer`, :func:`transfer_to_largest`, :func:`recolour_regions`: Reinhard's colour transfer, to the
     largest region, or from saved statistics.
 -   :func:`rgb_to_lab_rs`, :func:`lab_rs_to_rgb`: linear RGB to Reinhard's l-alpha-beta and back.
@@ -34,8 +35,8 @@ from scipy import ndimage
 
 from natscene.errors import InputError
 
-__all__ = ["segment", "rgb_to_lab_rs", "lab_rs_to_rgb", "region_stats", "transfer", "transfer_to_largest",
-           "recolour_regions"]
+__all__ = ["segment", "rgb_to_lab_rs", "lab_rs_to_rgb", "region_stats", "region_colours", "transfer",
+           "transfer_to_largest", "recolour_regions"]
 
 # Reinhard et al. 2001: linear RGB -> LMS, log10 LMS -> l-alpha-beta (their Eqs. 1-4)
 _RGB2LMS = np.array([[0.3811, 0.5783, 0.0402], [0.1967, 0.7244, 0.0782], [0.0241, 0.1288, 0.8444]])
@@ -146,6 +147,15 @@ def region_stats(rgb: np.ndarray, labels: np.ndarray) -> list[dict]:
             raise InputError(f"colour map: region {r} has no pixel")
         out.append({"pixels": int(len(v)), "mean": v.mean(0).tolist(), "std": v.std(0).tolist()})
     return out
+
+
+def region_colours(labels: np.ndarray, stats: list[dict]) -> np.ndarray:
+    """Linear RGB (H, W, 3): each pixel of the colour map ``labels`` in its region's mean colour (``stats`` of
+    :func:`region_stats`)."""
+    if int(labels.max()) >= len(stats):
+        raise InputError(f"colour map: region {int(labels.max())} has no saved statistics ({len(stats)} regions)")
+    means = np.clip(lab_rs_to_rgb(np.array([r["mean"] for r in stats], np.float64)), 0.0, None)
+    return means[labels]
 
 
 def transfer(rgb: np.ndarray, source: dict, target: dict) -> np.ndarray:
