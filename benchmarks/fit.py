@@ -66,7 +66,11 @@ def main():
     except Exception as e:  # noqa: BLE001 - fall back to the synthetic table
         print(f"no main-job precompute ({e}); using a synthetic table")
         tab, sky, photo, cloud, c_in, source = synthetic()
-    prob = FitProblem(tab, sky, photo, cloud, c_in, levels=Levels(256, "srgb"))
+    from natscene.fit.settings import fit_settings
+    from natscene.scatter.transport import of
+    # the settings the fit composes with every candidate (all_orders: the calibrated dome, fit.ground_albedo)
+    fixed = of(tab).fit_fixed(tab, sky, fit_settings(None), print)
+    prob = FitProblem(tab, sky, photo, cloud, c_in, levels=Levels(256, "srgb"), fixed=fixed)
     ranges = {"g": (0.0, float(tab.g.max()))}
     # warm-up, then the GA with every criterion but n_max disabled
     run_ga(prob, ranges, names=prob.names, n_max=2, epsilon_o=0, n_suc=0)
@@ -93,7 +97,7 @@ def main():
         numpy_search.search(lc)
     kappa_numpy_s = (time.perf_counter() - t0) / 3
     from natscene.scatter.compose import compose_cloud
-    params = {"c_in": c_in, **{p: vals[:, i] for i, p in enumerate(prob.names)}}
+    params = {"c_in": c_in, **{p: vals[:, i] for i, p in enumerate(prob.names)}, **prob.fixed}
     t0 = time.perf_counter()
     for _ in range(3):
         compose_cloud(tab, params, sky)
@@ -105,16 +109,17 @@ def main():
         from natscene.geometry import Camera, sun_direction
         from natscene.scatter.render import render
         from natscene.volume.grid import load_volume
-        from natscene.config import load_yaml_config
-        cfg = load_yaml_config(ROOT / "config" / "config.yaml")
+        from natscene.config import load_yaml_config, validate_config
+        cfg = validate_config(load_yaml_config(ROOT / "config" / "config.yaml"),
+                              ROOT / "workflow" / "schemas" / "config.schema.yaml")
         view = cfg["views"]["kite"]
         vol = load_volume(results / "volumes" / "cumulus")
         cam = Camera.from_view(view)
         sun = sun_direction(view["sun"]["azimuth"], view["sun"]["elevation"])
         one = {"c_in": c_in, **{p: float(vals[0, i]) for i, p in enumerate(prob.names)}, "kappa_a": r.best.kappa}
-        render(vol, cam, sun, one, sky, orders=4, spp=4)  # warm-up (kernel compilation)
+        render(vol, cam, sun, one, sky, {"orders": 4, "spp": 4})  # warm-up (kernel compilation)
         t0 = time.perf_counter()
-        render(vol, cam, sun, one, sky, orders=4, spp=args.render_spp)
+        render(vol, cam, sun, one, sky, {"orders": 4, "spp": args.render_spp})
         render_s = time.perf_counter() - t0
     except Exception as e:  # noqa: BLE001
         print(f"direct render baseline unavailable: {e}")

@@ -34,7 +34,7 @@ def synthetic():
 def main():
     vol = load_volume(sys.argv[1]) if len(sys.argv) > 1 else synthetic()
     spp = int(sys.argv[2]) if len(sys.argv) > 2 else 256
-    cam = Camera((0.0, 0.25, -2.4), (0.0, 0.3, 0.0), fov=36, width=320, height=240)
+    cam = Camera((0.0, 0.25, -2.4), (0.0, 0.3, 0.0), (0.0, 1.0, 0.0), fov=36, width=320, height=240)
     sun = sun_direction(130, 35)
     t = time.perf_counter()
     tb = precompute(vol, cam, sun, n_m=4, spp=spp, log=print)
@@ -43,10 +43,10 @@ def main():
     t = time.perf_counter()
     render_reference(vol, cam, sun, 0.5, 0.5, 0.9, orders=4, spp=spp)
     t_ref = time.perf_counter() - t
-    cam2 = Camera(cam.position, cam.look_at, fov=36, width=640, height=480)
+    cam2 = Camera(cam.position, cam.look_at, cam.up, fov=36, width=640, height=480)
     p = dict(c_in=[1, 1, 1], L_in=5.0, g=0.5, sigma_t=0.5, beta=0.9, L_amb=0.1, kappa_a=[0.1] * 3)
     t = time.perf_counter()
-    render(vol, cam2, sun, p, np.zeros(3, np.float32), orders=4, spp=32)
+    render(vol, cam2, sun, p, np.zeros(3, np.float32), {"orders": 4, "spp": 32})
     t_render = time.perf_counter() - t
     res = {"precompute_s": t_pre, "timings": tb.meta["timings"], "spp": spp,
            "volpath_one_param_set_s": t_ref, "ratio_precompute_vs_110_volpath": t_pre / (110 * t_ref),

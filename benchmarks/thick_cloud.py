@@ -104,11 +104,18 @@ cam = Camera(tuple(c[0:3]), tuple(c[3:6]), tuple(c[6:9]), float(c[9]), int(c[10]
 shot = dict(load_yaml_config(a["root"] + "/config/config.yaml")["shots"]["day_to_sunset"]["render"])
 p = dict(c_in=[1.0] * 3, L_in=1.0, g=a["g"], sigma_t=a["sigma"], beta=a["beta"], kappa_a=[0.0] * 3,
          sky_scale=[0.0] * 3, ground_albedo=0.0)
-render(vol, cam, z["sun"], p, np.zeros(3, np.float32), seed=0, skylight=False, **{**shot, "spp": 1})
+import inspect
+if "settings" in inspect.signature(render).parameters:   # render(..., settings): the shot's render section
+    go = lambda seed, **over: render(vol, cam, z["sun"], p, np.zeros(3, np.float32), {**shot, **over, "seed": seed},
+                                     skylight=False)
+else:                                                   # older versions: the settings as keywords
+    go = lambda seed, **over: render(vol, cam, z["sun"], p, np.zeros(3, np.float32), seed=seed, skylight=False,
+                                     **{**shot, **over})
+go(0, spp=1)
 out = {}
 for seed in range(a["seeds"]):
     t0 = time.perf_counter()
-    img = render(vol, cam, z["sun"], p, np.zeros(3, np.float32), seed=seed, skylight=False, **shot)[..., 0]
+    img = go(seed)[..., 0]
     out[f"img{seed}"] = img
     out[f"t{seed}"] = time.perf_counter() - t0
 np.savez(a["out"], **out)
@@ -166,15 +173,15 @@ def main() -> int:
            "cloud_pixels": int(mask.sum()),
            "reference_spp": int(np.load(REFS)["cb_day.spp"].sum()),
            "reference_noise_relative": {k: v / ref[mask].mean() for k, v in ref_noise.items()}}
-    render(vol, cam, sun, p, np.zeros(3, np.float32), seed=0, skylight=False, **{**shot, "spp": 1})   # compile
+    render(vol, cam, sun, p, np.zeros(3, np.float32), {**shot, "seed": 0, "spp": 1}, skylight=False)   # compile
     runs = {}
     shot_st = frame_settings(shot)
     for name, st in (("shot_settings", shot_st), ("cells_1_voxel", replace(shot_st, fine_voxels=1, coarse_voxels=1))):
         runs[name] = []
         for seed in range(a.seeds):
             t0 = time.perf_counter()
-            img = render(vol, cam, sun, p, np.zeros(3, np.float32), seed=seed, skylight=False, all_orders=st,
-                         **shot)[..., 0]
+            img = render(vol, cam, sun, p, np.zeros(3, np.float32), {**shot, "seed": seed}, skylight=False,
+                         all_orders=st)[..., 0]
             runs[name].append((time.perf_counter() - t0, img.astype(np.float64)))
         res[f"natscene_{name}"] = summary(runs[name], ref, ref_noise, mask, opacity)
         print(name, res[f"natscene_{name}"], flush=True)

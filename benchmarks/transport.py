@@ -215,7 +215,7 @@ def noise_target_only():
 
 def main():
     from natscene.fit.keyframe import fit_keyframe
-    from natscene.scatter.allorders import frame_settings, settings_from_config
+    from natscene.scatter.allorders import settings_from_config
     from natscene.scatter.render import render
     from natscene.scatter.tables import precompute
     from natscene.variant import select_variant
@@ -244,15 +244,13 @@ def main():
         chosen = fit["params"]["chosen"]
         p = {k: chosen[k] for k in ("L_in", "g", "extinction", "beta", "L_amb", "c_in", "kappa_a")}
         p.update({k: chosen[k] for k in ("sky_scale", "ground_albedo") if k in chosen})
-        kw = dict(transport=transport)
         if transport == "dobashi":
-            kw.update(orders=pre["n_m"], spp=16)
+            shot = {"transport": transport, "orders": pre["n_m"], "spp": 16}
         else:
-            kw.update(all_orders=frame_settings({"sun_collisions": st.sun_collisions,
-                                                 "sky_collisions": st.sky_collisions}))
-        render(vol, camera, sun, p, products["sky"], **kw)                # warm-up
+            shot = {"transport": transport, "sun_collisions": st.sun_collisions, "sky_collisions": st.sky_collisions}
+        render(vol, camera, sun, p, products["sky"], shot)                # warm-up
         t0 = time.perf_counter()
-        render(vol, camera, sun, p, products["sky"], **kw)
+        render(vol, camera, sun, p, products["sky"], shot)
         t_frame = time.perf_counter() - t0
         result[transport] = {
             "precompute_s": round(t_pre, 1), "noise": noise_figures(tables.meta, transport),

@@ -41,7 +41,7 @@ def small_set(W=64, H=48, spp=1, sun_rgb=None, sky=None, with_film=True, grey_gr
     """Dong §2.5's setting at garden scale: a textured ground, a flower of a pattern texture, one spectral
     object (the gold bug), a parallel D65 sun (``sun_rgb``: a coloured sun) and a sky dome (neutral unless
     ``sky`` = (zenith, horizon); ``grey_ground``: a neutral ground, whose bounce light is D65-shaped too)."""
-    cam = Camera((0, 0.16, -0.3), (0, 0.06, 0.1), fov=40, width=W, height=H)
+    cam = Camera((0, 0.16, -0.3), (0, 0.06, 0.1), (0, 1, 0), fov=40, width=W, height=H)
     yy = np.linspace(0, 1, H)[:, None, None]
     plate = np.broadcast_to(np.array([0.3, 0.45, 0.8]) * (1 - yy) + np.array([0.7, 0.75, 0.8]) * yy, (H, W, 3)).copy()
     ck = ((np.indices((8, 8)).sum(0) % 2)[..., None] * np.array([0.3, 0.25, 0.1]) + np.array([0.1, 0.3, 0.05]))
@@ -268,7 +268,7 @@ def _checker(n_texels=64, squares=16):
 def _ground_render(filtered=True):
     """A checkerboard ground to the horizon under a constant sky (radiance 1 everywhere: L = albedo)."""
     W, H = 160, 120
-    cam = Camera((0.0, 1.0, 0.0), (0.0, 0.6, 10.0), fov=40, width=W, height=H)
+    cam = Camera((0.0, 1.0, 0.0), (0.0, 0.6, 10.0), (0.0, 1.0, 0.0), fov=40, width=W, height=H)
     spec = SetSpec(cam, np.zeros((H, W, 3), np.float32), Ground(MipTexture(_checker(64, 8), wrap=True), (2.0, 2.0)),
                    sun_dir=sun_direction(0, 60), sun_spd=d65() * 0.0, sky=gradient_sky([1, 1, 1], [1, 1, 1]), spp=1,
                    max_aniso=16)
@@ -470,7 +470,8 @@ def test_sky_dome_irradiance():
 # --------------------------------------------------------------------------------------- shot / inputs
 def _shot_entry():
     return {"shot": "s", "frames": [3], "origin": [0.0, 0.0, -1000.0], "spp": 1, "upsampling": "mallett2019",
-            "angle_step_deg": 1.0, "sun": {"intensity": None, "spd": "matched"},
+            "angle_step_deg": 1.0, "wavelengths": {"start": 380.0, "stop": 780.0, "step": 5.0},
+            "sun": {"intensity": None, "spd": "matched"},
             "ground": {"texture": {"color": [0.2, 0.4, 0.1]}, "extent": [2.0, 2.0]}, "meadow": {}}
 
 
@@ -531,7 +532,7 @@ def test_aerial_perspective_over_the_ground_is_dobashi_eq3():
     the ray's distance t to the ground): the far ground takes the horizon sky's colour, the near its own."""
     from natscene.composite.set_spec import Atmosphere
     W, H = 9, 120
-    cam = Camera((0.0, 1.0, 0.0), (0.0, 1.0, 10.0), fov=40, width=W, height=H)
+    cam = Camera((0.0, 1.0, 0.0), (0.0, 1.0, 10.0), (0.0, 1.0, 0.0), fov=40, width=W, height=H)
     sky = gradient_sky([0.2, 0.3, 0.9], [0.8, 0.7, 0.6])
     kappa = np.array([1.0, 2.0, 4.0])
     spec = SetSpec(cam, np.zeros((H, W, 3), np.float32),

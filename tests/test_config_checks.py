@@ -188,7 +188,7 @@ def test_all_problems_are_reported_at_once(smoke):
 def test_box_coverage_counts_the_frame_that_meets_the_box():
     """The share of the frame whose rays meet a box: a box filling the view, half of it, none of it."""
     from natscene.geometry import Camera, box_coverage
-    cam = Camera((0.0, 0.0, -10.0), (0.0, 0.0, 0.0), fov=40, width=64, height=48)
+    cam = Camera((0.0, 0.0, -10.0), (0.0, 0.0, 0.0), (0.0, 1.0, 0.0), fov=40, width=64, height=48)
     assert box_coverage(cam, (-100, -100, -1), (100, 100, 1)) == 1.0
     assert box_coverage(cam, (0, -100, -1), (100, 100, 1)) == pytest.approx(0.5, abs=0.02)
     assert box_coverage(cam, (-1, -1, -30), (1, 1, -20)) == 0.0          # behind the camera
@@ -197,7 +197,7 @@ def test_box_coverage_counts_the_frame_that_meets_the_box():
 
 def test_camera_problem_geometry():
     assert camera_problem({"position": [0, 0, -1], "look_at": [0, 0, 0], "up": [0, 1, 0]}) is None
-    assert camera_problem({"position": [0, 0, 0], "look_at": [0, 0, 0]}) is not None
+    assert camera_problem({"position": [0, 0, 0], "look_at": [0, 0, 0], "up": [0, 1, 0]}) is not None
     assert camera_problem({"position": [0, 0, 0], "look_at": [0, 0, 1], "up": [0, 0, 2]}) is not None
     assert camera_problem({"position": [0, 0, 0], "look_at": [0, 0, 1], "up": [0, 0, 0]}) is not None
     # a nearly-but-not parallel up is fine (the basis is well defined)

@@ -89,7 +89,7 @@ def test_features_of_a_sphere():
     right = int(len(row) - 1 - np.argmax(row[::-1] > 0.05))
     assert normal[20, right, 0] < -0.5 * np.linalg.norm(normal[20, right])
     f = frame_features(vol, cam, {"extinction": sigma * vol.extinction_scale, "beta": 0.9, "c_in": [2.0, 1.0, 0.5]},
-                       sky=np.full((41, 41, 3), 0.3, np.float32), supersample=2)
+                       sky=np.full((41, 41, 3), 0.3, np.float32), settings={"feature_supersample": 2})
     assert f["albedo"].min() >= 0 and f["albedo"].max() <= 1 and np.abs(f["normal"]).max() <= 1
     a = f["opacity"][20, 20]
     assert f["albedo"][20, 20] == pytest.approx(a * 0.9 * np.array([1.0, 0.5, 0.25]) + (1 - a) * 1.0, abs=1e-5)
@@ -109,7 +109,7 @@ def test_denoiser_cuts_the_noise_and_keeps_the_mean(tiny):
     cam = frame_camera(SIDE_CAM, (160, 120))
     sky = sky_image(cam, SUN, {})
     p = {k: np.asarray(v, np.float64) for k, v in FIT.items()}
-    raw = [render(tiny, cam, SUN, p, sky, transport="dobashi", orders=4, spp=4, seed=s) for s in (0, 1)]
+    raw = [render(tiny, cam, SUN, p, sky, {"transport": "dobashi", "orders": 4, "spp": 4, "seed": s}) for s in (0, 1)]
     f = frame_features(tiny, cam, p, sky)
     cloud = cloud_pixels(f["opacity"])
     assert cloud.sum() > 300
@@ -144,8 +144,8 @@ def test_1920x1080_frame_has_the_field_of_view_of_640x480(tiny):
         cam = frame_camera(SIDE_CAM, res)
         assert (cam.width, cam.height) == res and cam.fov == 36
         # the cloud's silhouette (transmittance T of the view march) is what is measured: single scattering only
-        _, comp = render(tiny, cam, SUN, p, np.zeros(3), transport="dobashi", orders=1, spp=1, supersample=1,
-                         return_components=True)
+        _, comp = render(tiny, cam, SUN, p, np.zeros(3),
+                         {"transport": "dobashi", "orders": 1, "spp": 1, "supersample": 1}, return_components=True)
         cloud = comp["T"] < 0.5
         rows = np.flatnonzero(cloud.any(axis=1))
         cover[res] = (cloud.sum() / res[1] ** 2, cloud.mean(), rows[0] / res[1], (rows[-1] + 1) / res[1])

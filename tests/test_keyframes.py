@@ -213,7 +213,7 @@ def test_preetham_zenith_and_published_values():
 
 
 def test_preetham_sky_darkens_and_reddens_at_sunset():
-    cam = Camera((0, 0.3, -2.4), (0, 0.3, 0), fov=40, width=32, height=24)
+    cam = Camera((0, 0.3, -2.4), (0, 0.3, 0), (0, 1, 0), fov=40, width=32, height=24)
     day = shot_sky_radiance({}, cam.ray_directions(), sun_direction(180, 35))   # the shots' default sky
     dusk = shot_sky_radiance({}, cam.ray_directions(), sun_direction(180, 3))
     assert day.shape == (24, 32, 3) and np.all(day >= 0)

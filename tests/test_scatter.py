@@ -24,7 +24,7 @@ from natscene.scatter.tables import load_tables, precompute, save_tables
 from natscene.volume.grid import Volume, placement
 
 SUN = np.array([0.5, 0.6, 0.3]) / np.linalg.norm([0.5, 0.6, 0.3])
-CAM = Camera((0.0, 0.25, -2.4), (0.0, 0.28, 0.0), fov=30, width=32, height=24)
+CAM = Camera((0.0, 0.25, -2.4), (0.0, 0.28, 0.0), (0.0, 1.0, 0.0), fov=30, width=32, height=24)
 
 
 K = 40.0   # the blob's extinction_scale: extinction [1/m of the unit box] = sigma_t * K
@@ -65,7 +65,7 @@ def test_constant_box_closed_forms():
     lo, hi = placement((n, n, n))
     vol = Volume(np.ones((n, n, n), np.float32), lo, hi, 5.0)
     sun = np.array([0.0, 1.0, 0.0])
-    cam = Camera((0.0, 0.3, -2.0), (0.0, 0.3, 0.0), fov=20, width=24, height=18)
+    cam = Camera((0.0, 0.3, -2.0), (0.0, 0.3, 0.0), (0.0, 1.0, 0.0), fov=20, width=24, height=18)
     med = make_medium(vol, sun)
     sig = [0.0, 0.3, 1.0]
     r = march_view(med, cam, sig, supersample=1)
@@ -146,7 +146,7 @@ def test_g08_meets_three_percent_with_stronger_reference(vol):
     resolution (expected combined noise ~0.02). At 16x12 a pixel spans ~2 voxels of the blob: the
     single-scattering march's 2x2 sub-rays (supersample=4) then leave a 2.6 % per-pixel box-filter error
     against volpath's order 1 (measured; 1.1 % with 4x4), so this test marches 4x4 sub-rays per pixel."""
-    cam = Camera(CAM.position, CAM.look_at, fov=CAM.fov, width=16, height=12)
+    cam = Camera(CAM.position, CAM.look_at, CAM.up, fov=CAM.fov, width=16, height=12)
     tb = precompute(vol, cam, SUN, extinctions=[0.0, 0.5 * K], gs=[0.0, 0.4, 0.8], n_m=4, spp=32768, seed=2, transport="dobashi",
                     supersample=16, with_error=False)
     img = compose(tb, params(0.5, 0.8, 0.95), np.zeros((12, 16, 3), np.float32))[0, ..., 0]
@@ -164,7 +164,7 @@ def test_sampling_options_are_unbiased(vol, opts):
     """Splitting at the first vertex and sun-guided directions change only the variance: the image sums
     of every order and g agree with plain sampling within 4 combined standard errors."""
     med = make_medium(vol, SUN)
-    cam = Camera(CAM.position, CAM.look_at, fov=CAM.fov, width=16, height=12)
+    cam = Camera(CAM.position, CAM.look_at, CAM.up, fov=CAM.fov, width=16, height=12)
     a, sa = trace_orders(med, cam, 0.5, [0.0, 0.8], n_max=3, spp=4096, seed=4, with_error=True)
     b, sb = trace_orders(med, cam, 0.5, [0.0, 0.8], n_max=3, spp=4096 // opts.get("split", 1), seed=5,
                          with_error=True, **opts)
@@ -239,7 +239,7 @@ def test_render_agrees_with_compose_and_interpolation_error(tables, vol):
     for sig, g, tol in [(0.5, 0.4, 0.03), (0.75, 0.6, 0.10)]:  # grid point, then between grid points
         p = params(sig, g, 0.95, L_amb=0.05, kappa=0.2)
         c = compose(tb, p, sky)[0]
-        r = render(vol, CAM, SUN, p, sky, orders=4, spp=1024, seed=9, transport="dobashi")
+        r = render(vol, CAM, SUN, p, sky, {"orders": 4, "spp": 1024, "seed": 9, "transport": "dobashi"})
         cloud = tb.footprint > 0
         err = rel_l1(c, r, cloud)
         print(f"compose vs render sigma_t={sig} g={g}: relative L1 {err:.4f}")

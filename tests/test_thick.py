@@ -80,7 +80,7 @@ def test_thick_heap_tables_match_volpath(refs, heap_tables, name):
 def test_thick_heap_render_matches_volpath(refs, heap_tables, name):
     """The forward renderer: the mean of two runs (one run's 8x8 blocks scatter by up to 8 % at depth 300)."""
     vol, tb = heap_tables
-    img = np.mean([render(vol, CAM, SUN, _params(refs, name, K), np.zeros(3, np.float32), seed=s, skylight=False,
+    img = np.mean([render(vol, CAM, SUN, _params(refs, name, K), np.zeros(3, np.float32), {"seed": s}, skylight=False,
                           all_orders=RENDER_SETTINGS)[..., 0] for s in (5, 6)], axis=0)
     _agree(img, _ref(refs, name), tb.footprint > 0, f"render {name}")
 
@@ -93,7 +93,7 @@ def test_thick_heap_render_by_similarity_matches_volpath(refs, heap_tables, name
     from dataclasses import replace
     vol, tb = heap_tables
     st = replace(RENDER_SETTINGS, similarity_order=32, max_order=65536)
-    img = np.mean([render(vol, CAM, SUN, _params(refs, name, K), np.zeros(3, np.float32), seed=s, skylight=False,
+    img = np.mean([render(vol, CAM, SUN, _params(refs, name, K), np.zeros(3, np.float32), {"seed": s}, skylight=False,
                           all_orders=st)[..., 0] for s in (5, 6)], axis=0)
     _agree(img, _ref(refs, name), tb.footprint > 0, f"render by similarity {name}")
 
@@ -135,8 +135,9 @@ def test_cumulonimbus_by_opacity_band_at_shot_settings(refs):
     sun = refs["cb_day.sun"]
     p = _params(refs, "cb_day", vol.extinction_scale)
     st = frame_settings(cfg["shots"]["day_to_sunset"]["render"])
-    img = np.mean([render(vol, cam, sun, p, np.zeros(3, np.float32), seed=s, skylight=False, all_orders=st,
-                          step_voxels=st.step_voxels, supersample=st.supersample)[..., 0] for s in (0, 1)], axis=0)
+    img = np.mean([render(vol, cam, sun, p, np.zeros(3, np.float32),
+                          {"seed": s, "step_voxels": st.step_voxels, "supersample": st.supersample},
+                          skylight=False, all_orders=st)[..., 0] for s in (0, 1)], axis=0)
     ref = _ref(refs, "cb_day")
     opacity = 1 - march_view(make_medium(vol), cam, [float(refs["cb_day.params"][0])])["T"][0]
     ratios = {}

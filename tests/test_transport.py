@@ -18,7 +18,7 @@ import pytest
 
 import natscene  # noqa: F401
 from natscene.config import default_settings
-from natscene.errors import InputError
+from natscene.errors import ConfigError, InputError
 from natscene.scatter.allorders import AllOrdersSettings, Lighting, Scene, frame_settings, view_images
 from natscene.scatter.bands import SUN_BANDS, band_table, band_weights, check_bands, fit_ratios
 from natscene.scatter.compose import compose
@@ -99,7 +99,7 @@ def rendered(vol, tables, references):
     foot = tables.footprint > 0
     out = {}
     for (s, g, b), ref in references.items():
-        img = render(vol, CAM, SUN, _params(s, g, b), np.zeros(3, np.float32), seed=5, skylight=False,
+        img = render(vol, CAM, SUN, _params(s, g, b), np.zeros(3, np.float32), {"seed": 5}, skylight=False,
                      all_orders=RENDER_SETTINGS)[..., 0]
         tab = compose(tables, _params(s, g, b), np.zeros((CAM.height, CAM.width, 3), np.float32))[0][..., 0]
         out[s, g, b] = _ratios(img, ref, foot, f"render sigma_t={s} g={g} beta={b}") + (
@@ -146,7 +146,7 @@ def test_slab_reflectance_transmittance_match_long_volpath(g):
         ref = sum(render_reference(vol, cam, sun, 1.0, g, beta, orders=100_000, spp=4096, seed=k)
                   for k in range(2))[..., 0].mean() / 2
         p = dict(c_in=[1.0] * 3, L_in=1.0, g=g, extinction=vol.extinction_scale, beta=beta, kappa_a=[0.0] * 3)
-        ours = np.mean([render(vol, cam, sun, p, np.zeros(3, np.float32), seed=seed, skylight=False,
+        ours = np.mean([render(vol, cam, sun, p, np.zeros(3, np.float32), {"seed": seed}, skylight=False,
                                all_orders=_frames(sun_collisions=16_000_000))[..., 0].mean() for seed in range(4)])
         print(f"slab g={g} {'reflected' if above else 'transmitted'}: ours {ours:.5f} volpath {ref:.5f}")
         assert abs(ours / ref - 1) <= 0.02
@@ -163,7 +163,7 @@ def test_energy_conservationslab_volume():
     p = dict(c_in=[1.0] * 3, L_in=1.0, g=0.5, extinction=vol.extinction_scale, beta=1.0, kappa_a=[0.0] * 3)
     flux = {}
     for above in (True, False):
-        L = [render(vol, slab_camera(mu, above, res=8), sun, p, np.zeros(3, np.float32), seed=3,
+        L = [render(vol, slab_camera(mu, above, res=8), sun, p, np.zeros(3, np.float32), {"seed": 3},
                     skylight=False, all_orders=_frames(sun_collisions=3_000_000))[..., 0].mean() for mu in mus]
         flux[above] = 2 * np.pi * float(np.sum(wts * mus * np.asarray(L)))
     total = flux[True] + flux[False] + np.exp(-1.0)
@@ -283,13 +283,13 @@ def test_sky_dome_lights_the_shadow_side(vol):
     pixels gain light, and a dome with zero radiance gives exactly the sun-only image."""
     p = dict(c_in=[1.0] * 3, L_in=3.0, g=0.85, extinction=0.5 * K, beta=0.99, kappa_a=[0.0] * 3)
     sky = np.full(3, 0.3, np.float32)
-    dark = render(vol, CAM, SUN, p, sky, seed=1, skylight=False, all_orders=_frames(sun_collisions=1_000_000))
-    zero = render(vol, CAM, SUN, p, sky, seed=1, dome=Dome(np.zeros((4, 8, 3)), np.zeros(3)), ground_albedo=0.0,
+    dark = render(vol, CAM, SUN, p, sky, {"seed": 1}, skylight=False, all_orders=_frames(sun_collisions=1_000_000))
+    zero = render(vol, CAM, SUN, p, sky, {"seed": 1, "ground_albedo": 0.0}, dome=Dome(np.zeros((4, 8, 3)), np.zeros(3)),
                   all_orders=_frames(sun_collisions=1_000_000, sky_collisions=50_000))
-    lit = render(vol, CAM, SUN, p, sky, seed=1, dome=uniform_dome(0.3),
+    lit = render(vol, CAM, SUN, p, sky, {"seed": 1}, dome=uniform_dome(0.3),
                  all_orders=_frames(sun_collisions=1_000_000, sky_collisions=2_000_000))
     assert np.allclose(zero, dark, rtol=1e-5, atol=1e-7)
-    cloud = render(vol, CAM, SUN, p, np.zeros(3, np.float32), seed=1, skylight=False, return_components=True,
+    cloud = render(vol, CAM, SUN, p, np.zeros(3, np.float32), {"seed": 1}, skylight=False, return_components=True,
                    all_orders=_frames(sun_collisions=100_000))[1]["T"] < 0.5
     shade = dark[..., 0][cloud] < np.percentile(dark[..., 0][cloud], 20)
     assert lit[..., 0][cloud][shade].mean() > 1.2 * dark[..., 0][cloud][shade].mean()
@@ -301,8 +301,8 @@ def test_bad_transport_settings(vol):
     with pytest.raises(InputError, match="precompute.skylight.model"):
         precompute(vol, CAM, SUN, extinctions=[0.5 * K], gs=[0.5], skylight={"model": "hosek"},
                    all_orders=default_settings(AllOrdersSettings, sun_collisions=10_000, sky_collisions=10_000))
-    with pytest.raises(InputError, match="shots.<name>.render.transport"):
-        render(vol, CAM, SUN, _params(0.5, 0.5, 0.9), np.zeros(3), transport="bouthors")
+    with pytest.raises(ConfigError, match=r"shots\.<name>\.render.*transport.*'bouthors'"):
+        render(vol, CAM, SUN, _params(0.5, 0.5, 0.9), np.zeros(3), {"transport": "bouthors"})
     with pytest.raises(InputError, match="precompute.n_m"):
         precompute(vol, CAM, SUN, extinctions=[0.5 * K], gs=[0.5], n_m=0, transport="dobashi")
     with pytest.raises(InputError, match="precompute.spp"):

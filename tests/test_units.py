@@ -31,8 +31,8 @@ NAMES = ("L_in", "g", "extinction", "beta", "L_amb")
 
 def _cloud(scale: float):
     vol = build_volume({**SPEC, "size": 2000.0 * scale}, "units")[0]
-    cam = Camera((200.0 * scale, 800.0 * scale, -3000.0 * scale), (0.0, 700.0 * scale, 0.0), fov=36, width=48,
-                 height=36)
+    cam = Camera((200.0 * scale, 800.0 * scale, -3000.0 * scale), (0.0, 700.0 * scale, 0.0), (0.0, 1.0, 0.0), fov=36,
+                 width=48, height=36)
     return vol, cam
 
 
@@ -44,10 +44,9 @@ def test_same_extinction_per_metre_doubles_the_optical_depth_of_a_cloud_twice_th
     (v1, c1), (v2, c2) = _cloud(1.0), _cloud(2.0)
     assert v2.extinction_scale == pytest.approx(v1.extinction_scale / 2, rel=1e-6)   # the builder's normalisation
     sky = np.zeros(3, np.float32)
-    t1 = render(v1, c1, SUN, _params(TRUE), sky, orders=1, transport="dobashi", supersample=1,
-               return_components=True)[1]["T"]
-    t2 = render(v2, c2, SUN, _params(TRUE), sky, orders=1, transport="dobashi", supersample=1,
-               return_components=True)[1]["T"]
+    settings = {"orders": 1, "transport": "dobashi", "supersample": 1}
+    t1 = render(v1, c1, SUN, _params(TRUE), sky, settings, return_components=True)[1]["T"]
+    t2 = render(v2, c2, SUN, _params(TRUE), sky, settings, return_components=True)[1]["T"]
     cloud = t1 < 0.99
     assert cloud.sum() > 100
     np.testing.assert_allclose(t2[cloud], t1[cloud] ** 2, rtol=2e-3, atol=2e-5)

@@ -2,7 +2,9 @@
 Config checks
 =============
 
-Defines the checks of a schema-valid config that a JSON schema cannot express, run before any job starts:
+Defines the checks of a validated config (:func:`natscene.config.validate_config`: the schema's defaults filled in,
+which the checks read as they are, with no default of their own) that a JSON schema cannot express, run before
+any job starts:
 
 -   :func:`check_config`: raise :class:`natscene.errors.ConfigError` listing every problem.
 -   :func:`config_problems`: every problem of a config, each with its key path.
@@ -57,7 +59,7 @@ def _names(section) -> str:
 
 
 def _ref(p: _Problems, config: dict, key: str, value, section: str) -> bool:
-    entries = config.get(section) or {}
+    entries = config[section]
     if value not in entries:
         p.add(key, f"{value!r} is not in '{section}' (defined: {_names(entries)})")
         return False
@@ -77,10 +79,10 @@ def _file(p: _Problems, root, key: str, path, what: str) -> None:
 
 # --------------------------------------------------------------------------------------------- geometry
 def camera_problem(cam: dict) -> str | None:
-    """Why a camera {position, look_at, up, fov} is degenerate, or None."""
-    pos = np.asarray(cam.get("position", (0, 0, 0)), np.float64)
-    at = np.asarray(cam.get("look_at", (0, 0, 1)), np.float64)
-    up = np.asarray(cam.get("up", (0, 1, 0)), np.float64)
+    """Why a validated camera {position, look_at, up, fov} is degenerate, or None."""
+    pos = np.asarray(cam["position"], np.float64)
+    at = np.asarray(cam["look_at"], np.float64)
+    up = np.asarray(cam["up"], np.float64)
     fwd = at - pos
     dist = float(np.linalg.norm(fwd))
     scale = max(float(np.linalg.norm(pos)), float(np.linalg.norm(at)), 1.0)
@@ -120,7 +122,7 @@ def _product_problem(config: dict, product: str, frames: list[int]) -> str | Non
     """Why ``product`` (a path under the results directory, may contain {frame}) is not made by any stage."""
     parts = product.strip("/").split("/")
     head = parts[0]
-    sec = lambda name: config.get(name) or {}  # noqa: E731
+    sec = lambda name: config[name]  # noqa: E731
 
     def need(section, name, what):
         if name not in sec(section):
@@ -134,7 +136,7 @@ def _product_problem(config: dict, product: str, frames: list[int]) -> str | Non
         why = need("shots", name, "shot")
         if why:
             return why
-        n = sec("shots")[name].get("frames", 24)
+        n = sec("shots")[name]["frames"]
         if _FRAME_FIELD.search(product):
             bad = [f for f in frames if f >= n]
             if bad:
@@ -150,15 +152,15 @@ def _product_problem(config: dict, product: str, frames: list[int]) -> str | Non
         return need("patterns", name, "pattern")
     if head == "leaves":
         leaves = sec("leaves")
-        if name != leaves.get("name", "maple"):
-            return f"names leaf {name!r}, but leaves.name is {leaves.get('name', 'maple')!r}"
+        if name != leaves["name"]:
+            return f"names leaf {name!r}, but leaves.name is {leaves['name']!r}"
         if len(parts) >= 4:
             climate, date = parts[2], Path(parts[3]).stem
-            if climate not in (leaves.get("cases") or {}):
+            if climate not in leaves["cases"]:
                 return f"names climate case {climate!r}, which is not in 'leaves.cases' " \
-                       f"(defined: {_names(leaves.get('cases') or {})})"
-            if parts[3].endswith(".exr") and date not in (leaves.get("dates") or []):
-                return f"names date {date!r}, which is not in 'leaves.dates' ({', '.join(leaves.get('dates') or [])})"
+                       f"(defined: {_names(leaves['cases'])})"
+            if parts[3].endswith(".exr") and date not in leaves["dates"]:
+                return f"names date {date!r}, which is not in 'leaves.dates' ({', '.join(leaves['dates'])})"
         return None
     if head == "sky":
         return need("photos", name, "photo")
@@ -189,8 +191,8 @@ def _image_source(p: _Problems, config: dict, root, key: str, src: dict | None, 
 
 # ------------------------------------------------------------------------------------------- sections
 def _check_volumes(p, config, root):
-    for name, v in (config.get("volumes") or {}).items():
-        if v.get("kind") == "file":
+    for name, v in config["volumes"].items():
+        if v["kind"] == "file":
             if not v.get("path"):
                 p.add(f"volumes.{name}.path", "needed with kind: file (a .npy or Mitsuba .vol grid)")
             else:
@@ -198,14 +200,14 @@ def _check_volumes(p, config, root):
 
 
 def _check_views(p, config):
-    for name, view in (config.get("views") or {}).items():
+    for name, view in config["views"].items():
         _camera(p, f"views.{name}.camera", view.get("camera"))
         _sun_above(p, f"views.{name}.sun", view.get("sun"),
                    "the precompute and fit of a view (sunlight on the cloud from above)")
 
 
 def _check_photos(p, config, root):
-    for name, ph in (config.get("photos") or {}).items():
+    for name, ph in config["photos"].items():
         _file(p, root, f"photos.{name}.path", ph.get("path"), "photo")
         if ph.get("mask"):
             _file(p, root, f"photos.{name}.mask", ph["mask"], "mask")
@@ -218,16 +220,14 @@ def _increasing(p, key, values):
 
 
 def _check_precompute(p, config):
-    pre = config.get("precompute") or {}
-    for i, pair in enumerate(pre.get("pairs") or []):
+    pre = config["precompute"]
+    for i, pair in enumerate(pre["pairs"]):
         _ref(p, config, f"precompute.pairs[{i}].volume", pair.get("volume"), "volumes")
         _ref(p, config, f"precompute.pairs[{i}].view", pair.get("view"), "views")
-    if "extinction" in pre:
-        _increasing(p, "precompute.extinction", pre["extinction"])
-    if config.get("keyframes"):
+    _increasing(p, "precompute.extinction", pre["extinction"])
+    if config["keyframes"]:
         _check_fit_extinction(p, config)
-    if "g" in pre:
-        _increasing(p, "precompute.g", pre["g"])
+    _increasing(p, "precompute.g", pre["g"])
 
 
 def _check_fit_extinction(p, config):
@@ -243,11 +243,11 @@ def view_sees_volume_problem(view: dict, spec: dict, volume: str) -> str | None:
     volume imported from a file without ``size``/``altitude``: its box is known only once it is read)."""
     from natscene.geometry import Camera, box_coverage
     from natscene.volume.build import world_box
-    if spec.get("kind", "cumulus") == "file" and spec.get("size") is None and spec.get("altitude") is None:
+    if spec["kind"] == "file" and spec.get("size") is None and spec.get("altitude") is None:
         return None
-    if camera_problem(view.get("camera") or {}):
+    if camera_problem(view["camera"]):
         return None                                   # reported as its own problem
-    nx, ny, nz = (int(r) for r in spec.get("resolution", [128, 96, 128]))
+    nx, ny, nz = (int(r) for r in spec["resolution"])
     lo, hi = world_box(spec, (nx, ny, nz))
     cam = Camera.from_view(view)
     if box_coverage(cam, lo, hi) > 0.0:
@@ -259,7 +259,7 @@ def view_sees_volume_problem(view: dict, spec: dict, volume: str) -> str | None:
 
 
 def _check_keyframes(p, config):
-    for name, kf in (config.get("keyframes") or {}).items():
+    for name, kf in config["keyframes"].items():
         _ref(p, config, f"keyframes.{name}.photo", kf.get("photo"), "photos")
         has_volume = _ref(p, config, f"keyframes.{name}.volume", kf.get("volume"), "volumes")
         has_view = _ref(p, config, f"keyframes.{name}.view", kf.get("view"), "views")
@@ -270,28 +270,28 @@ def _check_keyframes(p, config):
 
 
 def _check_shots(p, config):
-    for name, shot in (config.get("shots") or {}).items():
+    for name, shot in config["shots"].items():
         key = f"shots.{name}"
         _ref(p, config, f"{key}.volume", shot.get("volume"), "volumes")
-        n = shot.get("frames", 24)
-        ats = [k.get("at") for k in shot.get("keyframes") or []]
+        n = shot["frames"]
+        ats = [k["at"] for k in shot["keyframes"]]
         if len(set(ats)) != len(ats):
             p.add(f"{key}.keyframes", f"two keyframes share a frame index ({sorted(ats)})")
-        for i, kf in enumerate(shot.get("keyframes") or []):
+        for i, kf in enumerate(shot["keyframes"]):
             kk = f"{key}.keyframes[{i}]"
-            if kf.get("at", 0) >= n:
+            if kf["at"] >= n:
                 p.add(f"{kk}.at", f"frame {kf['at']} is past the shot's last frame {n - 1}; lower it or raise "
                                   f"'{key}.frames'")
             fit = kf.get("fit")
             view = None
             if fit is not None and _ref(p, config, f"{kk}.fit", fit, "keyframes"):
-                view = (config.get("views") or {}).get(config["keyframes"][fit].get("view"))
+                view = config["views"].get(config["keyframes"][fit]["view"])
             for part in ("sun", "camera"):
                 if kf.get(part) is None and view is None and fit is None:
                     p.add(f"{kk}.{part}", "needed when the keyframe has no 'fit' whose view would give it")
             if fit is None:
                 from natscene.keyframes.shot import COLOURS, PARAMS
-                missing = [q for q in PARAMS + COLOURS if q not in (kf.get("params") or {})]
+                missing = [q for q in PARAMS + COLOURS if q not in kf["params"]]
                 if missing:
                     p.add(f"{kk}.params", f"{missing} missing; give them or name a fitted keyframe with 'fit'")
             _camera(p, f"{kk}.camera", kf.get("camera"))
@@ -300,27 +300,27 @@ def _check_shots(p, config):
 
 
 def _check_textures(p, config, root):
-    for name, t in (config.get("textures") or {}).items():
+    for name, t in config["textures"].items():
         key = f"textures.{name}"
         _file(p, root, f"{key}.path", t.get("path"), "example photo")
-        sc, out = t.get("scale") or {}, t.get("output") or {}
-        if sc.get("from") == "mask" and sc.get("mask"):
+        sc, out = t["scale"], t["output"]
+        if sc["from"] == "mask" and sc.get("mask"):
             _file(p, root, f"{key}.scale.mask", sc["mask"], "feature mask")
-        if (t.get("types") or {}).get("labels"):
+        if t["types"].get("labels"):
             _file(p, root, f"{key}.types.labels", t["types"]["labels"], "type label image")
-        if (out.get("scale") or {}).get("kind") == "image":
+        if out["scale"]["kind"] == "image":
             _file(p, root, f"{key}.output.scale.image", out["scale"].get("image"), "target scale-map image")
-        if (out.get("scale") or {}).get("kind", "resample") != "resample" and sc.get("from", "none") == "none":
+        if out["scale"]["kind"] != "resample" and sc["from"] == "none":
             p.add(f"{key}.output.scale", "a target scale map needs the example's scale feature (scale.from is none)")
         for k in ("types", "colour"):
             if out.get(k):
                 _file(p, root, f"{key}.output.{k}", out[k], f"target {k} map")
         work = t.get("working_size")
-        if t.get("method") == "quilting" and work and min(work) < t["quilting"]["cell"] * (
+        if t["method"] == "quilting" and work and min(work) < t["quilting"]["cell"] * (
                 1 + 2 * t["quilting"]["overlap"]):  # (validated: the schema's defaults are in)
             p.add(f"{key}.quilting.cell", f"a cell with its overlap does not fit in the {work[0]}x{work[1]} example "
                                           f"(working_size)")
-        sizes, size = (t.get("optimisation") or {}).get("sizes"), out.get("size")
+        sizes, size = t["optimisation"]["sizes"], out["size"]
         if sizes and size and min(size) < max(sizes):
             W, H = size
             p.add(f"{key}.output.size", f"{W}x{H} is smaller than the largest neighbourhood {max(sizes)} "
@@ -328,7 +328,7 @@ def _check_textures(p, config, root):
 
 
 def _check_tiles(p, config, root):
-    for name, t in (config.get("tiles") or {}).items():
+    for name, t in config["tiles"].items():
         if bool(t.get("path")) == bool(t.get("product")):
             p.add(f"tiles.{name}", "give the example as exactly one of 'path' (a file) and 'product' (another "
                                    "stage's product, e.g. textures/<name>/synth.png)")
@@ -338,31 +338,31 @@ def _check_tiles(p, config, root):
                 p.add(f"tiles.{name}.product", f"{t['product']!r} {why}")
         else:
             _file(p, root, f"tiles.{name}.path", t.get("path"), "example texture")
-        for i, e in enumerate(t.get("embed") or []):
+        for i, e in enumerate(t["embed"]):
             _file(p, root, f"tiles.{name}.embed[{i}].path", e.get("path"), "embedded object image")
 
 
 def _check_patterns(p, config, root):
-    for name, pat in (config.get("patterns") or {}).items():
-        shape = pat.get("shape") or {}
+    for name, pat in config["patterns"].items():
+        shape = pat["shape"]
         if shape.get("kind") == "file":
             _file(p, root, f"patterns.{name}.shape.path", shape.get("path"), "petal shape mask")
-    for name, r in (config.get("recolour") or {}).items():
+    for name, r in config["recolour"].items():
         _file(p, root, f"recolour.{name}.photo", r.get("photo"), "flower photo")
 
 
 def _check_mie(p, config):
-    demo = (config.get("mie") or {}).get("demo") or {}
+    demo = config["mie"]["demo"]
     if demo.get("volume") is not None:
         _ref(p, config, "mie.demo.volume", demo["volume"], "volumes")
-        deck_shots = [s for s in ("glory", "fogbow", "silver_lining") if (demo.get(s) or {}).get("cloud") == "deck"]
+        deck_shots = [s for s in ("glory", "fogbow", "silver_lining") if demo[s]["cloud"] == "deck"]
         if demo.get("deck") is not None:
             _ref(p, config, "mie.demo.deck", demo["deck"], "volumes")
         elif deck_shots:
             p.add("mie.demo.deck", f"names no volume, but the demo shots {deck_shots} look at the deck "
                                    f"(cloud: deck); name a stratocumulus volume of 'volumes' or set their cloud "
                                    f"to 'volume'")
-        _sun_above(p, "mie.demo.sun", demo.get("sun"), "the Mie demo (glory, fogbow, silver lining)")
+        _sun_above(p, "mie.demo.sun", demo["sun"], "the Mie demo (glory, fogbow, silver lining)")
 
 
 def _material_problem(material, wavelengths: tuple[float, float]) -> str | None:
@@ -380,41 +380,41 @@ def _material_problem(material, wavelengths: tuple[float, float]) -> str | None:
 
 
 def _check_composite(p, config, root):
-    shots = config.get("shots") or {}
-    for name, c in (config.get("composite") or {}).items():
+    shots = config["shots"]
+    for name, c in config["composite"].items():
         key = f"composite.{name}"
-        frames = list(c.get("frames") or [0])
+        frames = list(c["frames"])
         shot = c.get("shot")
         if shot is not None:
             # frame k of the composite is frame k of the shot: its camera, sun, sky and cloud plate
             if _ref(p, config, f"{key}.shot", shot, "shots"):
-                n = shots[shot].get("frames", 24)
+                n = shots[shot]["frames"]
                 bad = [f for f in frames if f >= n]
                 if bad:
                     p.add(f"{key}.frames", f"frames {bad} are past the last frame ({n - 1}) of shot {shot!r}; "
                                            f"lower them or raise 'shots.{shot}.frames'")
         else:
             # without a shot: the composite's own camera, background plate and sun
-            _camera(p, f"{key}.camera", c.get("camera"))
-            _image_source(p, config, root, f"{key}.background", c.get("background"), frames)
-            _sun_above(p, f"{key}.sun", c.get("sun"), "the composite (the sun lights the ground, petals and leaves)")
-        sun = c.get("sun") or {}
+            _camera(p, f"{key}.camera", c["camera"])
+            _image_source(p, config, root, f"{key}.background", c["background"], frames)
+            _sun_above(p, f"{key}.sun", c["sun"], "the composite (the sun lights the ground, petals and leaves)")
+        sun = c["sun"]
         if sun.get("sky_product"):
             why = _product_problem(config, sun["sky_product"], frames)
             if why:
                 p.add(f"{key}.sun.sky_product", f"{sun['sky_product']!r} {why}")
-        _image_source(p, config, root, f"{key}.ground.texture", (c.get("ground") or {}).get("texture"), frames)
-        meadow = c.get("meadow") or {}
-        for i, flower in enumerate(meadow.get("flowers") or []):
+        _image_source(p, config, root, f"{key}.ground.texture", c["ground"]["texture"], frames)
+        meadow = c["meadow"]
+        for i, flower in enumerate(meadow["flowers"]):
             # petals are textured with patterns/<pattern>/color.exr, made for the entries of 'patterns'
             _ref(p, config, f"{key}.meadow.flowers[{i}].pattern", flower.get("pattern"), "patterns")
         for i, src in enumerate((meadow.get("leaves") or {}).get("textures") or []):
             _image_source(p, config, root, f"{key}.meadow.leaves.textures[{i}]", src, frames)
-        wl = c.get("wavelengths") or {}
-        span = (float(wl.get("start", 380)), float(wl.get("stop", 780)))
-        for i, beetle in enumerate(meadow.get("beetles") or []):
+        wl = c["wavelengths"]
+        span = (float(wl["start"]), float(wl["stop"]))
+        for i, beetle in enumerate(meadow["beetles"]):
             bk = f"{key}.meadow.beetles[{i}]"
-            for j, layer in enumerate(beetle.get("layers") or []):
+            for j, layer in enumerate(beetle["layers"]):
                 why = _material_problem(layer.get("material"), span)
                 if why:
                     p.add(f"{bk}.layers[{j}].material", why)
@@ -425,7 +425,8 @@ def _check_composite(p, config, root):
 
 
 def config_problems(config: dict, root: str | os.PathLike) -> list[str]:
-    """Every cross-reference, input-file, geometry and value-relation problem of a schema-valid config."""
+    """Every cross-reference, input-file, geometry and value-relation problem of a validated config
+    (:func:`natscene.config.validate_config`)."""
     p = _Problems()
     _check_volumes(p, config, root)
     _check_views(p, config)

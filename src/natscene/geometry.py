@@ -47,22 +47,24 @@ def _normalize(v) -> np.ndarray:
 
 @dataclass(frozen=True)
 class Camera:
-    """A pinhole camera. ``fov`` is the vertical field of view in degrees; resolution is (width, height)."""
+    """A pinhole camera. ``fov`` is the vertical field of view in degrees; resolution is (width, height). No field
+    has a default: a view's come from its config entry (:meth:`from_view`; the schema's defaults are the only
+    ones)."""
 
     position: tuple
     look_at: tuple
-    up: tuple = (0.0, 1.0, 0.0)
-    fov: float = 40.0
-    width: int = 320
-    height: int = 240
+    up: tuple
+    fov: float
+    width: int
+    height: int
 
     @classmethod
     def from_view(cls, view: dict, resolution=None) -> "Camera":
-        """Build from a validated ``views.<name>`` config entry (``resolution`` overrides the view's)."""
+        """Build from a validated ``views.<name>`` config entry (the schema's defaults filled in; ``resolution``
+        overrides the view's)."""
         cam = view["camera"]
-        w, h = resolution or view.get("resolution", (320, 240))
-        return cls(tuple(cam["position"]), tuple(cam["look_at"]), tuple(cam.get("up", (0, 1, 0))),
-                   float(cam.get("fov", 40.0)), int(w), int(h))
+        w, h = resolution or view["resolution"]
+        return cls(tuple(cam["position"]), tuple(cam["look_at"]), tuple(cam["up"]), float(cam["fov"]), int(w), int(h))
 
     def basis(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(right, true_up, forward) unit vectors."""

@@ -193,8 +193,8 @@ def build_set(entry: dict, frame: int, results: str, root: str, shot_cfg: dict |
     if sun_c_in is not None:
         sun_cfg["c_in"] = sun_c_in
     c_in = np.asarray(sun_cfg.get("c_in", sun_cfg.get("color", (1, 1, 1))), np.float64)
-    wl = entry.get("wavelengths", {})
-    grid = WavelengthGrid(float(wl.get("start", 380)), float(wl.get("stop", 780)), float(wl.get("step", 5)))
+    wl = entry["wavelengths"]
+    grid = WavelengthGrid(float(wl["start"]), float(wl["stop"]), float(wl["step"]))
     # ground
     g = entry["ground"]
     gt = load_image(g["texture"], frame, results, root, (64, 64), "ground.texture")[..., :3]

@@ -6,6 +6,7 @@ Defines the feature images of a cloud for a learned denoiser (Intel Open Image D
 ``normal`` inputs), computed from the volume and the frame's camera, without noise:
 
 -   :func:`frame_features`: all feature images of one frame (opacity, coverage, albedo, normal).
+-   :func:`denoiser_settings`: a shot's ``denoiser`` section with the schema's defaults.
 -   :func:`view_features`: the opacity, normal and coverage of the cloud seen by a camera.
 -   :func:`albedo_image`: the albedo image.
 -   :func:`density_gradient`, :func:`empty_space_distance`: the volume's density gradient and distance to the
@@ -31,7 +32,8 @@ so that
   event. Its length is at most alpha (a thin wisp has a short normal, the sky none).
 
 Each pixel is the box-filtered mean of ``supersample`` x ``supersample`` stratified sub-pixel rays (the colour
-image's filter is a box too). The march uses the trilinear density (cell-centred, like Mitsuba's
+image's filter is a box too; a frame's: ``shots.<name>.denoiser.feature_supersample``, and its march step
+``feature_step_voxels``). The march uses the trilinear density (cell-centred, like Mitsuba's
 ``gridvolume``) at ``step_voxels`` steps (midpoint rule), skips empty space by the Euclidean distance to the
 nearest non-empty voxel (sphere tracing on :func:`empty_space_distance`) and stops once T < ``t_min``; the
 kernel is compiled with numba, parallel over rays.
@@ -47,7 +49,8 @@ from numba import njit, prange
 
 from natscene.geometry import ray_box
 
-__all__ = ["density_gradient", "empty_space_distance", "view_features", "albedo_image", "frame_features"]
+__all__ = ["density_gradient", "empty_space_distance", "view_features", "albedo_image", "frame_features",
+           "denoiser_settings"]
 
 # A trilinear lookup at p reads the 8 voxel centres within max-norm 1 of p (Euclidean sqrt 3 voxels); the
 # distance map is read at the voxel centre nearest to p (up to sqrt 3 / 2 away): a step of d - SAFETY voxels
@@ -169,7 +172,7 @@ def _prepared(volume):
 _CACHE: dict = {}
 
 
-def view_features(volume, camera, sigma_t: float, supersample: int = 2, step_voxels: float = 1.0,
+def view_features(volume, camera, sigma_t: float, supersample: int, step_voxels: float,
                   t_min: float = 1e-3) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(opacity (H, W), normal (H, W, 3), coverage (H, W)) of the cloud seen by ``camera`` at ``sigma_t``.
 
@@ -223,12 +226,22 @@ def albedo_image(opacity: np.ndarray, beta: float, c_in, sky: np.ndarray | None 
     return np.clip(a * cloud + (1.0 - a) * bg, 0.0, 1.0).astype(np.float32)
 
 
-def frame_features(volume, camera, params: dict, sky=None, supersample: int = 2,
-                   step_voxels: float = 1.0) -> dict:
+def denoiser_settings(section: dict | None = None, key: str = "shots.<name>.denoiser") -> dict:
+    """A shot's denoiser settings: ``section`` (a validated ``shots.<name>.denoiser``, a part of one, or None) with
+    each key it lacks the schema's default (:func:`natscene.config.complete_section`: the schema's defaults are the
+    only ones; a bad key or value raises :class:`natscene.errors.ConfigError` naming ``key``)."""
+    from natscene.config import complete_section
+    return complete_section(section, "shots.schema.yaml", ("additionalProperties", "denoiser"), key)
+
+
+def frame_features(volume, camera, params: dict, sky=None, settings: dict | None = None) -> dict:
     """All feature images of one frame: {opacity, coverage, albedo, normal} for the frame's parameter set
-    (``extinction`` in 1/m, ``beta``, ``c_in``) and sky (H, W, 3) (or None)."""
+    (``extinction`` in 1/m, ``beta``, ``c_in``) and sky (H, W, 3) (or None). ``settings``: the shot's denoiser
+    section (:func:`denoiser_settings`; None: the schema's defaults), whose ``feature_supersample`` and
+    ``feature_step_voxels`` are :func:`view_features`' ``supersample`` and ``step_voxels``."""
+    d = denoiser_settings(settings)
     sigma_t = float(np.asarray(params["extinction"]).reshape(-1)[0]) / float(volume.extinction_scale)
-    alpha, normal, cover = view_features(volume, camera, sigma_t, supersample, step_voxels)
+    alpha, normal, cover = view_features(volume, camera, sigma_t, d["feature_supersample"], d["feature_step_voxels"])
     beta = float(np.asarray(params.get("beta", 1.0)).reshape(-1)[0])
     albedo = albedo_image(alpha, beta, params.get("c_in", (1.0, 1.0, 1.0)), sky)
     return {"opacity": alpha, "coverage": cover, "albedo": albedo, "normal": np.clip(normal, -1.0, 1.0)}

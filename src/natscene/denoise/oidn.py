@@ -12,9 +12,9 @@ Defines the denoiser of the frames, Intel Open Image Denoise (OIDN 2.x) through 
 OIDN is a convolutional network trained on path-traced images; fed with noise-free auxiliary images of what
 each pixel sees it keeps the edges and texture those images show and removes the Monte Carlo noise of the
 colour. Settings used here (OIDN's documentation, "RT" filter): ``hdr`` on (linear scene-referred radiance;
-``inputScale`` left to OIDN's automatic exposure estimate), ``cleanAux`` on (the features are exact), quality
-``high`` for final frames (``balanced``/``fast`` trade quality for speed), the CPU device with
-``numThreads`` = the job's threads (so a frame job keeps to the cores Snakemake gave it).
+``inputScale`` left to OIDN's automatic exposure estimate), ``cleanAux`` on (the features are exact), the quality
+of ``shots.<name>.denoiser.quality`` (``high`` for final frames; ``balanced``/``fast`` trade quality for speed),
+the CPU device with ``numThreads`` = the job's threads (so a frame job keeps to the cores Snakemake gave it).
 
 The denoiser only changes what the cloud covers: ``out = raw + coverage (oidn(raw) - raw)``, coverage the
 fraction of a pixel's sub-rays that meet the cloud. Elsewhere the frame is the analytic sky, which carries no
@@ -40,9 +40,13 @@ class DenoiserUnavailable(InputError):
 
 
 class OIDN:
-    """A committed OIDN CPU device and ``RT`` filter; call it on (color, albedo, normal) float32 (H, W, 3)."""
+    """A committed OIDN CPU device and ``RT`` filter; call it on (color, albedo, normal) float32 (H, W, 3).
+    ``quality``: one of :data:`QUALITIES` (None: the schema's ``shots.<name>.denoiser.quality``)."""
 
-    def __init__(self, key: str = "denoise", threads: int | None = None, quality: str = "high"):
+    def __init__(self, key: str = "denoise", threads: int | None = None, quality: str | None = None):
+        if quality is None:
+            from natscene.denoise.features import denoiser_settings
+            quality = denoiser_settings()["quality"]
         if quality not in QUALITIES:
             raise InputError(f"config key '{key}': denoiser quality {quality!r} is not one of {QUALITIES}")
         try:

@@ -31,7 +31,7 @@ __all__ = ["SUN", "CAM", "SIGMAS", "GS", "BETAS", "NOSKY", "K", "SETTINGS", "blo
            "slab_volume", "slab_camera", "block_ratios"]
 
 SUN = np.array([0.5, 0.6, 0.3]) / np.linalg.norm([0.5, 0.6, 0.3])
-CAM = Camera((0.0, 0.25, -1.8), (0.0, 0.28, 0.0), fov=30, width=48, height=36)
+CAM = Camera((0.0, 0.25, -1.8), (0.0, 0.28, 0.0), (0.0, 1.0, 0.0), fov=30, width=48, height=36)
 SIGMAS, GS, BETAS = (0.2, 0.5, 1.0), (0.0, 0.85), (0.9, 0.99, 0.999)
 NOSKY = {"sky_scale": [0.0, 0.0, 0.0], "ground_albedo": 0.0}
 #: the blob's extinction_scale: extinction [1/m of the unit box] = sigma_t * K

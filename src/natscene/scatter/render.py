@@ -6,13 +6,15 @@ Defines the forward renderer: the cloud model of Dobashi et al. (2012, Eqs. 3–
 tables, at any view, sun and resolution (the keyframe frames), with the same transport as the precompute:
 
 -   :func:`render`: L_cg (H, W, 3) for one parameter set.
+-   :func:`render_settings`: the renderer's settings, a shot's ``render`` section with the schema's defaults.
 
 Common to every transport: the sun optical-depth volume for this sun (:mod:`natscene.scatter.medium`) and the
 ray-marched S_sun, S_amb, T at the given extinction in 1/m (``params["extinction"]``, mu_t = e rho; the tracers
-take the volume's unitless sigma_t = e / ``extinction_scale``) (:mod:`natscene.scatter.single`); the transport
-(:mod:`natscene.scatter.transport`, ``transport=``) gives the cloud's own light (its ``render``: single and
-multiple scattering, and for ``all_orders`` the skylight of the frame's dome), then Eq. 4 adds the sky seen
-through the cloud, L_b = T L_sky, and Eq. 3 the atmosphere.
+take the volume's unitless sigma_t = e / ``extinction_scale``) (:mod:`natscene.scatter.single`, at its hit
+threshold of t_c and the footprint); the transport (:mod:`natscene.scatter.transport`, the settings'
+``transport``) gives the cloud's own light (its ``render``: single and multiple scattering, and for ``all_orders``
+the skylight of the frame's dome), then Eq. 4 adds the sky seen through the cloud, L_b = T L_sky, and Eq. 3 the
+atmosphere.
 
 References
 ----------
@@ -26,26 +28,33 @@ import numpy as np
 
 from natscene.errors import InputError
 from natscene.scatter.params import population
-from natscene.scatter.skylight import DEFAULT_GROUND_ALBEDO
 from natscene.scatter.transport.base import RenderOptions
 
-__all__ = ["render"]
+__all__ = ["render", "render_settings"]
 
 
-def render(volume, camera, sun_dir, params: dict, sky, orders: int = 4, spp: int = 64, seed: int = 0,
-           step_voxels: float = 0.5, supersample: int = 4, rho_threshold: float = 0.01,
-           batch_spp: int | None = None, return_components: bool = False, transport: str = "all_orders",
-           sky_settings=None, dome=None, ground_albedo=DEFAULT_GROUND_ALBEDO, skylight: bool = True,
-           all_orders=None):
+def render_settings(section: dict | None = None, key: str = "shots.<name>.render") -> dict:
+    """The forward renderer's settings: ``section`` (a validated ``shots.<name>.render``, a part of one, or None)
+    with each key it lacks the schema's default (:func:`natscene.config.complete_section`: the schema's defaults
+    are the only ones; a bad key or value raises :class:`natscene.errors.ConfigError` naming ``key``)."""
+    from natscene.config import complete_section
+    return complete_section(section, "shots.schema.yaml", ("additionalProperties", "render"), key)
+
+
+def render(volume, camera, sun_dir, params: dict, sky, settings: dict | None = None, *, batch_spp: int | None = None,
+           return_components: bool = False, sky_settings=None, dome=None, skylight: bool = True, all_orders=None):
     """L_cg (H, W, 3) for one parameter set (scalars; c_in and kappa_a (3,)).
 
     ``sky``: (H, W, 3) linear L_sky at the camera's resolution (or a constant (3,) colour).
+    ``settings``: the shot's render section (a validated ``shots.<name>.render``, or a part of one; None: the
+    schema's defaults), through :func:`render_settings`: ``transport``, ``seed``, ``step_voxels``,
+    ``supersample``, ``ground_albedo`` (all_orders), ``orders``, ``spp`` (dobashi) and the all-orders transport's
+    collision budgets. ``batch_spp``: the dobashi transport's paths per pass (None: automatic).
     ``return_components``: also return a dict with L_s, L_m, L_b, T, t_c, footprint (all_orders: L_m holds
     every order >= 2 of the sun's light and L_sky_lit the skylight's). ``skylight=False``: the sun alone
     lights the cloud (all_orders; e.g. to compare with a sun-only reference). ``all_orders``: the all-orders
-    transport's :class:`natscene.scatter.allorders.AllOrdersSettings`, used as they are (a shot's:
-    :func:`natscene.scatter.allorders.frame_settings` of its render section); None: the shots' defaults at this
-    ``step_voxels`` and ``supersample``. ``orders``, ``spp``, ``batch_spp``: the dobashi transport's settings.
+    transport's :class:`natscene.scatter.allorders.AllOrdersSettings`, used as they are; None: those of
+    ``settings`` (:func:`natscene.scatter.allorders.frame_settings`).
     ``sky_settings``: the shot's sky (a validated ``shots.<name>.sky`` or its
     :class:`natscene.sky.daylight.Skylight`), whose dome lights the cloud (all_orders) unless ``dome`` is given.
     """
@@ -54,7 +63,11 @@ def render(volume, camera, sun_dir, params: dict, sky, orders: int = 4, spp: int
     from natscene.scatter.tables import geometry_images
     from natscene.scatter.transport import get
 
-    model = get(transport, "shots.<name>.render.transport")
+    s = render_settings(settings)
+    if all_orders is None:
+        from natscene.scatter.allorders import frame_settings
+        all_orders = frame_settings(s)
+    model = get(s["transport"], "shots.<name>.render.transport")
     P, p = population(params)
     if P != 1:
         raise InputError(f"render: one parameter set expected, got a population of {P}")
@@ -64,20 +77,17 @@ def render(volume, camera, sun_dir, params: dict, sky, orders: int = 4, spp: int
         sky = np.broadcast_to(sky.reshape(1, 1, -1), (H, W, 3))
     if sky.shape != (H, W, 3):
         raise InputError(f"render: sky image has shape {sky.shape}, the camera renders {W}x{H}")
-    if orders < 1:
-        raise InputError(f"render: orders must be >= 1, got {orders}")
     extinction = float(p["extinction"][0])
     if not extinction >= 0.0:
         raise InputError(f"render: extinction {extinction:g} /m is negative (a keyframe's or "
                          f"shots.<name>.keyframes' extinction)")
     sigma = extinction / float(volume.extinction_scale)          # the tracers' unitless sigma_t
     med = make_medium(volume, sun_dir)
-    single = march_view(med, camera, [sigma], step_voxels=step_voxels, supersample=supersample,
-                        rho_threshold=rho_threshold)
+    single = march_view(med, camera, [sigma], step_voxels=s["step_voxels"], supersample=s["supersample"])
     t_c, cos_t, foot = geometry_images(camera, volume, med.sun_dir, single["t_hit"])
-    options = RenderOptions(seed=seed, step_voxels=step_voxels, supersample=supersample, orders=orders, spp=spp,
-                            batch_spp=batch_spp, sky_settings=sky_settings, dome=dome, ground_albedo=ground_albedo,
-                            skylight=skylight, all_orders=all_orders)
+    options = RenderOptions(seed=s["seed"], step_voxels=s["step_voxels"], supersample=s["supersample"],
+                            orders=s["orders"], spp=s["spp"], batch_spp=batch_spp, sky_settings=sky_settings,
+                            dome=dome, ground_albedo=s["ground_albedo"], skylight=skylight, all_orders=all_orders)
     cloud, comps = model.render(volume, med, camera, sigma, single, cos_t, p, sky, options)
     L_s, L_m = comps["L_s"], comps["L_m"]
     T = single["T"][0]

@@ -7,8 +7,7 @@ limit):
 
 -   :class:`Dome`, :func:`cell_directions`: the dome's radiance table and its cells' directions.
 -   :func:`daylight_dome`: the Preetham sky of a sun direction; :func:`uniform_dome`: a uniform dome.
--   :func:`irradiance`, :func:`ground_radiance`: the horizontal irradiance and the ground's radiance
-    (:data:`DEFAULT_GROUND_ALBEDO`).
+-   :func:`irradiance`, :func:`ground_radiance`: the horizontal irradiance and the ground's radiance.
 -   :func:`calibration`: the per-channel factors that give the dome the photo's mean sky radiance.
 
 The dome is a table of radiance over the upper hemisphere (cells uniform in cos(zenith) and azimuth, so all
@@ -39,10 +38,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["DEFAULT_GROUND_ALBEDO", "Dome", "cell_directions", "daylight_dome", "uniform_dome", "irradiance",
-           "ground_radiance", "calibration"]
-
-DEFAULT_GROUND_ALBEDO = 0.2      # the Lambertian ground's albedo when none is given (fit.ground_albedo's default)
+__all__ = ["Dome", "cell_directions", "daylight_dome", "uniform_dome", "irradiance", "ground_radiance",
+           "calibration"]
 
 
 @dataclass

@@ -14,8 +14,8 @@ colour-transformation stage):
 The one home of the wavelength grid and of the colour-matching functions and
 illuminant tables (colour-science's) for every stage that works with spectra (compositing, pigments, leaves).
 
-Spectra are sampled on a regular grid (default 380-780 nm every 5 nm, 81 samples; the pigment stages use
-400-770 nm, where PROSPECT-D has data). Tristimulus values are
+Spectra are sampled on a regular grid (by default the schema's ``composite.<name>.wavelengths``, 380-780 nm
+every 5 nm, 81 samples; the pigment stages use 400-770 nm, where PROSPECT-D has data). Tristimulus values are
 ``X_k = kappa * sum_i S(lambda_i) xbar_k(lambda_i) dlambda`` with the CIE 1931 2° colour-matching functions
 (Dong §2.4). ``kappa`` is fixed once for the whole project: it makes the CIE D65 SPD (as tabulated, 100 at
 560 nm) integrate to Y = 1, so a *radiance* spectrum equal to D65 is the linear-sRGB white (1, 1, 1) that the
@@ -47,11 +47,12 @@ CMFS_NAME = "CIE 1931 2 Degree Standard Observer"
 
 @dataclass(frozen=True)
 class WavelengthGrid:
-    """Regular wavelength sampling in nm, both ends included."""
+    """Regular wavelength sampling in nm, both ends included (no default: a composite's grid is its config's
+    ``wavelengths``, :data:`DEFAULT_GRID` the schema's default of it)."""
 
-    start: float = 380.0
-    stop: float = 780.0
-    step: float = 5.0
+    start: float
+    stop: float
+    step: float
 
     def __post_init__(self):
         if not (self.step > 0 and self.stop > self.start):
@@ -77,7 +78,15 @@ class WavelengthGrid:
         return colour.SpectralShape(self.start, self.stop, self.step)
 
 
-DEFAULT_GRID = WavelengthGrid()
+def _schema_grid() -> WavelengthGrid:
+    """The schema's default of ``composite.<name>.wavelengths`` (its one home)."""
+    from natscene.config import schema_section
+    props = schema_section("composite.schema.yaml", ("additionalProperties", "wavelengths"))["properties"]
+    return WavelengthGrid(*(float(props[k]["default"]) for k in ("start", "stop", "step")))
+
+
+#: The library's default grid: the composite's default ``wavelengths`` (config ``composite.<name>.wavelengths``).
+DEFAULT_GRID = _schema_grid()
 
 
 @lru_cache(maxsize=8)

@@ -43,7 +43,6 @@ from natscene.errors import InputError
 from natscene.io import read_exr, write_exr
 from natscene.scatter.nodes import brackets
 from natscene.scatter.params import rgb_per_individual
-from natscene.scatter.skylight import DEFAULT_GROUND_ALBEDO
 from natscene.scatter.phase import INV_4PI, hg
 from natscene.scatter.transport.base import Arrays, RenderOptions, Transport, noise_stats
 
@@ -288,7 +287,8 @@ def weights(tables, p: dict, P: int):
     """Per individual: the (e, g) brackets and the band weights of the all-orders composition.
 
     Returns sidx, gidx (P, 2), ws (P, 2), wsun (P, 2, 2, B) = w_g w_s L_in c_b(beta), wsky (P, 2, 2, B')
-    = w_g w_s c'_b(beta), a (P, 3) the dome's calibration, G (P, 3) the ground radiance."""
+    = w_g w_s c'_b(beta), a (P, 3) the dome's calibration, G (P, 3) the ground radiance (of ``p``'s
+    ``ground_albedo``, which the composition needs: the fit gives it, :meth:`AllOrders.fit_fixed`)."""
     from natscene.scatter.bands import band_weights
     sig = np.asarray(tables.extinction, np.float64)
     gs = np.asarray(tables.g, np.float64)
@@ -309,7 +309,10 @@ def weights(tables, p: dict, P: int):
             wsky[:, u, v] = w[:, None] * band_weights(kb, sky_r[g_n, s_n], p["beta"])
     sl = tables.meta.get("skylight", {})
     a = rgb_per_individual(p, "sky_scale", P, 1.0)
-    albedo = rgb_per_individual(p, "ground_albedo", P, DEFAULT_GROUND_ALBEDO)
+    if "ground_albedo" not in p:
+        raise InputError("compose: the all_orders transport needs the ground's albedo 'ground_albedo' in the "
+                         "parameters (the fit composes with fit.ground_albedo: Transport.fit_fixed)")
+    albedo = rgb_per_individual(p, "ground_albedo", P, None)
     e_dome = np.asarray(sl.get("irradiance_rgb", [0.0, 0.0, 0.0]), np.float64)
     sin_el = max(float(sl.get("sun_elevation_sin", 0.0)), 0.0)
     G = albedo / np.pi * (p["L_in"][:, None] * p["c_in"] * sin_el + a * e_dome[None])
@@ -461,11 +464,10 @@ class AllOrders(Transport):
         seed, skylight, dome = o.seed, o.skylight, o.dome
         sky_settings, ground_albedo = o.sky_settings, o.ground_albedo
         comps = {}
-        from natscene.scatter.allorders import Lighting, Scene, frame_settings, view_images
+        from natscene.scatter.allorders import Lighting, Scene, view_images
         from natscene.scatter.bands import band_weights
         from natscene.scatter.skylight import ground_radiance, irradiance
-        st = o.all_orders if o.all_orders is not None else frame_settings(
-            {"step_voxels": o.step_voxels, "supersample": o.supersample})
+        st = o.all_orders
         if skylight:
             dome = dome if dome is not None else frame_dome(med.sun_dir, sky_settings)
         else:

@@ -68,10 +68,11 @@ class Arrays:
 
 @dataclass
 class RenderOptions:
-    """The settings of a direct render that the transports read: :func:`natscene.scatter.render.render`'s keywords
-    (its defaults are the only ones): ``orders``, ``spp``, ``batch_spp`` (dobashi); ``all_orders`` (the
-    transport's :class:`natscene.scatter.allorders.AllOrdersSettings` or None), ``sky_settings``, ``dome``,
-    ``ground_albedo`` and ``skylight`` (all_orders)."""
+    """The settings of a direct render that the transports read, built by :func:`natscene.scatter.render.render`
+    from its settings (:func:`natscene.scatter.render.render_settings`: the schema's defaults are the only ones)
+    and keywords: ``orders``, ``spp``, ``batch_spp`` (dobashi); ``all_orders`` (the transport's
+    :class:`natscene.scatter.allorders.AllOrdersSettings`), ``sky_settings``, ``dome``, ``ground_albedo`` and
+    ``skylight`` (all_orders)."""
 
     seed: int
     step_voxels: float
