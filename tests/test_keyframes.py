@@ -28,8 +28,8 @@ DAY = {"L_in": 4.0, "g": 0.6, "extinction": 0.05, "beta": 0.9, "L_amb": 0.3, "ka
        "c_in": [1.0, 1.0, 1.0]}
 DUSK = {"L_in": 1.0, "g": 0.8, "extinction": 0.03, "beta": 0.7, "L_amb": 0.1, "kappa_a": 0.5,
         "c_in": [1.45, 0.92, 0.48]}
-CAM0 = {"position": [0.0, 0.25, -2.4], "look_at": [0.0, 0.3, 0.0], "fov": 36}
-CAM1 = {"position": [0.4, 0.2, -2.2], "look_at": [0.1, 0.3, 0.0], "fov": 40}
+CAM0 = {"position": [0.0, 0.25, -2.4], "look_at": [0.0, 0.3, 0.0], "up": [0, 1, 0], "fov": 36}  # as validated
+CAM1 = {"position": [0.4, 0.2, -2.2], "look_at": [0.1, 0.3, 0.0], "up": [0, 1, 0], "fov": 40}
 
 
 def _config(shot_keyframes, frames=9, **shot):
@@ -153,7 +153,7 @@ def test_catmull_rom_interpolates_and_reproduces_lines():
 
 
 def test_catmull_rom_camera_path_passes_through_keyframes():
-    cams = [CAM0, CAM1, {"position": [0.6, 0.3, -2.0], "look_at": [0.0, 0.3, 0.0], "fov": 40}]
+    cams = [CAM0, CAM1, {"position": [0.6, 0.3, -2.0], "look_at": [0.0, 0.3, 0.0], "up": [0, 1, 0], "fov": 40}]
     cfg = _config([{"at": a, "params": DAY, "sun": {"azimuth": 130, "elevation": 35}, "camera": c}
                    for a, c in zip((0, 4, 8), cams)], camera_path="catmull_rom")
     shot = cfg["shots"]["s"]

@@ -51,7 +51,7 @@ def prepare(out_dir: Path) -> None:
     import natscene  # noqa: F401
     from natscene.scatter.reference_scene import CAM, SUN, blob_volume
 
-    from natscene.config import load_yaml_config
+    from natscene.config import load_yaml_config, validate_config
     from natscene.geometry import sun_direction
     from natscene.keyframes.shot import frame_camera
     from natscene.volume.build import build_volume
@@ -61,7 +61,8 @@ def prepare(out_dir: Path) -> None:
     per_sigma = mean_view_depth(blob, CAM)
     for tau in BLOB_DEPTHS:
         cases[f"blob_t{tau:g}"] = dict(vol=blob, cam=CAM, sun=SUN, sigma=tau / per_sigma, g=BLOB_G, beta=BLOB_BETA)
-    cfg = load_yaml_config(ROOT / "config" / "config.yaml")
+    cfg = validate_config(load_yaml_config(ROOT / "config" / "config.yaml"),
+                          ROOT / "workflow" / "schemas" / "config.schema.yaml")
     cb, _ = build_volume(cfg["volumes"]["cumulonimbus"], "cumulonimbus")
     cam = frame_camera(cfg["shots"]["day_to_sunset"]["keyframes"][0]["camera"], CB["resolution"])
     cases["cb_day"] = dict(vol=cb, cam=cam, sun=sun_direction(CB["azimuth"], CB["elevation"]),

@@ -128,7 +128,7 @@ def frame_state(path: str) -> dict:
         cam = data["camera"]
         return {"camera": {"position": [float(v) for v in cam["position"]],
                            "look_at": [float(v) for v in cam["look_at"]],
-                           "up": [float(v) for v in cam.get("up", (0, 1, 0))], "fov": float(cam["fov"])},
+                           "up": [float(v) for v in cam["up"]], "fov": float(cam["fov"])},
                 "azimuth": float(data["sun"]["azimuth"]), "elevation": float(data["sun"]["elevation"]),
                 "c_in": [float(c) for c in data["params"]["c_in"]], "L_in": float(data["params"]["L_in"]),
                 "kappa_a": np.broadcast_to(np.asarray(data["params"].get("kappa_a", 0.0), np.float64), (3,)).copy()}

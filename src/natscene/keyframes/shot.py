@@ -76,7 +76,8 @@ def sorted_keyframes(shot: dict) -> list[tuple[int, dict]]:
 
 
 def resolve_keyframe(shot_name: str, index: int, kf: dict, config: dict) -> dict:
-    """A keyframe with its sun and camera filled in from the fit's view where not given (config only)."""
+    """A keyframe of the validated config (its camera's up and fov the schema's where not given) with its sun and
+    camera filled in from the fit's view where not given."""
     fit = kf.get("fit")
     view = None
     if fit is not None:
@@ -92,8 +93,6 @@ def resolve_keyframe(shot_name: str, index: int, kf: dict, config: dict) -> dict
         else:
             raise InputError(f"config key '{_key(shot_name, index)}.{part}': needed when the keyframe has no "
                              f"'fit' whose view would give it")
-    out["camera"].setdefault("up", [0.0, 1.0, 0.0])
-    out["camera"].setdefault("fov", 40.0)
     if fit is None:
         missing = [p for p in PARAMS + COLOURS if p not in out["params"] and p != "L_amb"]
         if missing:
@@ -152,7 +151,7 @@ def keyframe_params(resolved: dict, fitted: dict | None, source: str = "") -> di
 
 
 def _camera_vec(cam: dict) -> np.ndarray:
-    return np.concatenate([cam["position"], cam["look_at"], cam.get("up", [0, 1, 0]), [cam.get("fov", 40.0)]])
+    return np.concatenate([cam["position"], cam["look_at"], cam["up"], [cam["fov"]]])
 
 
 def _camera_dict(v: np.ndarray) -> dict:
@@ -241,4 +240,4 @@ def frame_camera(camera: dict, resolution) -> "Camera":
     if w < 1 or h < 1:
         raise InputError(f"frame resolution must be positive, got {list(resolution)}")
     return Camera(tuple(float(c) for c in camera["position"]), tuple(float(c) for c in camera["look_at"]),
-                  tuple(float(c) for c in camera.get("up", (0.0, 1.0, 0.0))), float(camera.get("fov", 40.0)), w, h)
+                  tuple(float(c) for c in camera["up"]), float(camera["fov"]), w, h)
