@@ -119,10 +119,10 @@ def test_white_furnace_at_depth_300():
     assert abs(img[cloud].mean() / L - 1) <= 0.02
 
 
-@pytest.mark.xfail(strict=True, reason="the thin bands read 19 %, 9.5 % and 3.9 % high at the default cache cells "
-                   "(2 and 4 voxels); cells of one voxel give 1.00 / 1.03 / 1.01 / 1.00 (docs/stages/precompute.md)")
+@pytest.mark.xfail(strict=True, reason="the thin bands read 8 %, 4.6 % and 2.2 % high at the shots' cache cells "
+                   "(2 and 2 voxels); cells of one voxel give 1.00 / 1.02 / 1.02 / 1.00 (docs/stages/precompute.md)")
 def test_cumulonimbus_by_opacity_band_at_shot_settings(refs):
-    """The day shot's render settings (config shots.day_to_sunset.render, the transport's default caches) on the
+    """The day shot's render settings (config shots.day_to_sunset.render, its cache cells) on the
     cumulonimbus at 160x120: the ratio to volpath within 3 % in each opacity band, mean of two runs."""
     from natscene.config import load_yaml_config
     from natscene.scatter.medium import make_medium

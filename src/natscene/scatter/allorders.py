@@ -115,7 +115,7 @@ def settings_from_config(precompute: dict) -> AllOrdersSettings:
 def frame_settings(render: dict | None) -> AllOrdersSettings:
     """The settings of a shot's frames, from its render section (a validated ``shots.<name>.render``, or a part of
     one: each key it lacks the schema's default): the precompute's defaults with the shot's collision budgets,
-    ``tally_rate``, ``ground_share`` (the share of the sky photons that come from the ground, ``p_ground``),
+    cache cells (``fine_voxels``, ``coarse_voxels``), ``tally_rate``, ``ground_share`` (the share of the sky photons that come from the ground, ``p_ground``),
     ``similarity_order``, ``step_voxels`` and ``supersample``; the angle biasing toward the camera off (``camera_lobe`` 0: on the main
     job's day frame it cut the noise figure by 13 % for about 20 % more time; docs/stages/precompute.md); photon
     caps that follow the budgets (at most one photon per two collisions, or the precompute's caps where higher).
@@ -127,6 +127,7 @@ def frame_settings(render: dict | None) -> AllOrdersSettings:
     st = default_settings(AllOrdersSettings)
     return replace(st, sun_collisions=int(r["sun_collisions"]), sky_collisions=int(r["sky_collisions"]),
                    tally_rate=float(r["tally_rate"]), p_ground=float(r["ground_share"]),
+                   fine_voxels=int(r["fine_voxels"]), coarse_voxels=int(r["coarse_voxels"]),
                    step_voxels=r["step_voxels"], supersample=r["supersample"], camera_lobe=0.0,
                    similarity_order=int(r["similarity_order"]),
                    sun_photons_max=max(st.sun_photons_max, int(r["sun_collisions"]) // 2),
