@@ -7,7 +7,8 @@ Writes into docs/img/:
 - ``composite_day_to_sunset.jpg``: the ``day_to_sunset`` composite, frames 0 and 23
   (``composite/day_to_sunset/<frame>/final.png``) side by side, 8 white pixels apart;
 - ``composite_compare.jpg``: frame 0's hybrid | full-spectral | CIEDE2000 sheet (``.../0000/compare.png``);
-- ``shot_day_to_sunset_filmstrip.png``: ``shots/day_to_sunset/filmstrip.png`` as it is;
+- ``shot_day_to_sunset_filmstrip.png``, ``shot_sunset_mie_filmstrip.png``: the shots' ``filmstrip.png`` as they
+  are;
 - ``shot_day_to_sunset.gif``: the shot's frames (``shots/day_to_sunset/frames/*.png``) at half size, at the shot's
   ``fps`` from ``config/config.yaml``;
 - ``textures_<name>.jpg``: each ``textures/<name>/compare.png`` the docs show, and ``textures_wood_completion.jpg``
@@ -43,7 +44,8 @@ def main(argv=None) -> int:
     comp = res / "composite" / "day_to_sunset"
     frames = sorted((res / "shots" / "day_to_sunset" / "frames").glob("[0-9][0-9][0-9][0-9].png"))
     sources = [comp / "0000" / "final.png", comp / "0023" / "final.png", comp / "0000" / "compare.png",
-               res / "shots" / "day_to_sunset" / "filmstrip.png", res / "textures" / "wood" / "completion_compare.png",
+               res / "shots" / "day_to_sunset" / "filmstrip.png", res / "shots" / "sunset_mie" / "filmstrip.png",
+               res / "textures" / "wood" / "completion_compare.png",
                *(res / "textures" / t / "compare.png" for t in TEXTURES)]
     missing = [str(p) for p in sources if not p.is_file()] + ([] if frames else ["shots/day_to_sunset/frames/*.png"])
     if missing:
@@ -53,7 +55,8 @@ def main(argv=None) -> int:
     gap = np.full((day.shape[0], 8, 3), 255, np.uint8)
     _jpeg(np.concatenate([day, gap, dusk], 1), IMG / "composite_day_to_sunset.jpg")
     _jpeg(cv2.imread(str(comp / "0000" / "compare.png")), IMG / "composite_compare.jpg")
-    shutil.copyfile(res / "shots" / "day_to_sunset" / "filmstrip.png", IMG / "shot_day_to_sunset_filmstrip.png")
+    for shot in ("day_to_sunset", "sunset_mie"):
+        shutil.copyfile(res / "shots" / shot / "filmstrip.png", IMG / f"shot_{shot}_filmstrip.png")
     fps = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())["shots"]["day_to_sunset"]["fps"]
     half = [Image.open(f).convert("RGB").reduce(2) for f in frames]
     half[0].save(IMG / "shot_day_to_sunset.gif", save_all=True, append_images=half[1:], duration=int(1000 / fps),
@@ -61,7 +64,7 @@ def main(argv=None) -> int:
     for t in TEXTURES:
         _jpeg(cv2.imread(str(res / "textures" / t / "compare.png")), IMG / f"textures_{t}.jpg")
     _jpeg(cv2.imread(str(res / "textures" / "wood" / "completion_compare.png")), IMG / "textures_wood_completion.jpg")
-    print(f"doc_images: {len(TEXTURES) + 5} images from {res} -> {IMG}")
+    print(f"doc_images: {len(TEXTURES) + 6} images from {res} -> {IMG}")
     return 0
 
 
