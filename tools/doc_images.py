@@ -11,6 +11,9 @@ Writes into docs/img/:
   are;
 - ``shot_day_to_sunset.gif``: the shot's frames (``shots/day_to_sunset/frames/*.png``) at half size, at the shot's
   ``fps`` from ``config/config.yaml``;
+- ``shot_day_cloud_unitless_vs_physical.png``, its right half: the day frame's cloud (frame 0, rows 0-150,
+  columns 190-430) at twice its size (bicubic); the left half, the same crop of the frame with the sigma_t
+  normalised per volume, is kept (no config makes it any more);
 - ``textures_<name>.jpg``: each ``textures/<name>/compare.png`` the docs show, and ``textures_wood_completion.jpg``
   from ``textures/wood/completion_compare.png``.
 
@@ -61,10 +64,14 @@ def main(argv=None) -> int:
     half = [Image.open(f).convert("RGB").reduce(2) for f in frames]
     half[0].save(IMG / "shot_day_to_sunset.gif", save_all=True, append_images=half[1:], duration=int(1000 / fps),
                  loop=0)
+    pair = cv2.imread(str(IMG / "shot_day_cloud_unitless_vs_physical.png"))
+    frame0 = cv2.imread(str(frames[0]))
+    pair[:, -480:] = cv2.resize(frame0[0:150, 190:430], (480, 300), interpolation=cv2.INTER_CUBIC)
+    cv2.imwrite(str(IMG / "shot_day_cloud_unitless_vs_physical.png"), pair)
     for t in TEXTURES:
         _jpeg(cv2.imread(str(res / "textures" / t / "compare.png")), IMG / f"textures_{t}.jpg")
     _jpeg(cv2.imread(str(res / "textures" / "wood" / "completion_compare.png")), IMG / "textures_wood_completion.jpg")
-    print(f"doc_images: {len(TEXTURES) + 6} images from {res} -> {IMG}")
+    print(f"doc_images: {len(TEXTURES) + 7} images from {res} -> {IMG}")
     return 0
 
 
