@@ -6,6 +6,8 @@ Writes into docs/img/:
 
 - ``composite_day_to_sunset.jpg``: the ``day_to_sunset`` composite, frames 0 and 23
   (``composite/day_to_sunset/<frame>/final.png``) side by side, 8 white pixels apart;
+- ``composite_detail.png``: two crops of frame 0 (rows 250-480, columns 0-330: the beetles and leaves; rows 170-400,
+  columns 310-640: the flowers) side by side, enlarged twice (nearest neighbour);
 - ``composite_compare.jpg``: frame 0's hybrid | full-spectral | CIEDE2000 sheet (``.../0000/compare.png``);
 - ``shot_day_to_sunset_filmstrip.png``, ``shot_sunset_mie_filmstrip.png``: the shots' ``filmstrip.png`` as they
   are;
@@ -57,6 +59,8 @@ def main(argv=None) -> int:
     day, dusk = (cv2.imread(str(comp / f / "final.png")) for f in ("0000", "0023"))
     gap = np.full((day.shape[0], 8, 3), 255, np.uint8)
     _jpeg(np.concatenate([day, gap, dusk], 1), IMG / "composite_day_to_sunset.jpg")
+    detail = np.concatenate([day[250:480, 0:330], day[170:400, 310:640]], 1)
+    cv2.imwrite(str(IMG / "composite_detail.png"), cv2.resize(detail, None, fx=2, fy=2, interpolation=cv2.INTER_NEAREST))
     _jpeg(cv2.imread(str(comp / "0000" / "compare.png")), IMG / "composite_compare.jpg")
     for shot in ("day_to_sunset", "sunset_mie"):
         shutil.copyfile(res / "shots" / shot / "filmstrip.png", IMG / f"shot_{shot}_filmstrip.png")
@@ -71,7 +75,7 @@ def main(argv=None) -> int:
     for t in TEXTURES:
         _jpeg(cv2.imread(str(res / "textures" / t / "compare.png")), IMG / f"textures_{t}.jpg")
     _jpeg(cv2.imread(str(res / "textures" / "wood" / "completion_compare.png")), IMG / "textures_wood_completion.jpg")
-    print(f"doc_images: {len(TEXTURES) + 7} images from {res} -> {IMG}")
+    print(f"doc_images: {len(TEXTURES) + 8} images from {res} -> {IMG}")
     return 0
 
 
