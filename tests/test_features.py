@@ -21,8 +21,8 @@ from skimage import data
 
 from natscene.config import default_settings
 from natscene.errors import InputError
-from natscene.features.colour import (lab_rs_to_rgb, recolour_regions, region_stats, rgb_to_lab_rs, segment,
-                                      transfer_to_largest)
+from natscene.features.colour import (lab_rs_to_rgb, recolour_regions, region_colours, region_stats, rgb_to_lab_rs,
+                                      segment, transfer_to_largest)
 from natscene.features.completion import complete, inpaint_baseline
 from natscene.features.optimisation import OptimisationSettings, synthesise
 from natscene.features.quilting import QuiltingSettings, cells, quilt
@@ -265,6 +265,18 @@ def test_colour_regions_get_their_colour_back_within_de2000_5():
     for r in range(2):
         lab = lambda a: colour.XYZ_to_Lab(colour.RGB_to_XYZ(a[labels == r].mean(0), "sRGB"))  # noqa: E731
         assert colour.delta_E(lab(back), lab(rgb), method="CIE 2000") <= 5.0
+
+
+def test_colour_map_preview_shows_each_flat_region_in_its_own_colour():
+    """A colour map drawn by region_colours gives a region of one flat colour exactly that colour (lαβ round trip),
+    and refuses a region without statistics."""
+    labels = np.zeros((8, 12), np.int32)
+    labels[:, 7:] = 1
+    rgb = np.where(labels[..., None] == 0, [0.6, 0.5, 0.2], [0.1, 0.3, 0.7])
+    shown = region_colours(labels, region_stats(rgb, labels))
+    assert np.allclose(shown, rgb, atol=1e-9)
+    with pytest.raises(InputError, match="region 1 has no saved statistics"):
+        region_colours(labels, region_stats(rgb, labels)[:1])
 
 
 # ---------------------------------------------------------------------------------------- completion (§6.7)
