@@ -6,7 +6,7 @@ Defines the band images of the all-orders transport: every scattering order of t
 skylight, per pixel, by bands (the remedies of Dobashi et al. 2012, §7):
 
 -   :class:`AllOrdersSettings`, :func:`settings_from_config`, :func:`frame_settings`: the transport's settings
-    (of the precompute, of a shot's frames).
+    (of the precompute, of a shot's frames); :func:`render_settings`: a shot's render section completed.
 -   :class:`Lighting`, :class:`Scene`: what lights the cloud, and the volume prepared once for a view.
 -   :func:`view_images`: the band images of one view at (sigma_t, g), as two independent halves
     (:class:`ViewImages`).
@@ -59,8 +59,8 @@ import numpy as np
 
 from natscene.scatter.bands import SKY_BANDS, SUN_BANDS, fit_ratios
 
-__all__ = ["AllOrdersSettings", "settings_from_config", "frame_settings", "Lighting", "Scene", "ViewImages",
-           "view_images", "standard_error", "budget_scale"]
+__all__ = ["AllOrdersSettings", "settings_from_config", "render_settings", "frame_settings", "Lighting", "Scene",
+           "ViewImages", "view_images", "standard_error", "budget_scale"]
 
 FINE_UP_TO_ORDER = 4
 
@@ -112,6 +112,14 @@ def settings_from_config(precompute: dict) -> AllOrdersSettings:
     return settings_from_section(AllOrdersSettings, section, "precompute.all_orders")
 
 
+def render_settings(section: dict | None = None, key: str = "shots.<name>.render") -> dict:
+    """A shot's render settings: ``section`` (a validated ``shots.<name>.render``, a part of one, or None) with each
+    key it lacks the schema's default (:func:`natscene.config.complete_section`: the schema's defaults are the only
+    ones; a bad key or value raises :class:`natscene.errors.ConfigError` naming ``key``)."""
+    from natscene.config import complete_section
+    return complete_section(section, "shots.schema.yaml", ("additionalProperties", "render"), key)
+
+
 def frame_settings(render: dict | None) -> AllOrdersSettings:
     """The settings of a shot's frames, from its render section (a validated ``shots.<name>.render``, or a part of
     one: each key it lacks the schema's default): the precompute's defaults with the shot's collision budgets,
@@ -122,8 +130,8 @@ def frame_settings(render: dict | None) -> AllOrdersSettings:
     The one place where a shot's render settings become the transport's."""
     from dataclasses import replace
 
-    from natscene.config import complete_section, default_settings
-    r = complete_section(render, "shots.schema.yaml", ("additionalProperties", "render"), "shots.<name>.render")
+    from natscene.config import default_settings
+    r = render_settings(render)
     st = default_settings(AllOrdersSettings)
     return replace(st, sun_collisions=int(r["sun_collisions"]), sky_collisions=int(r["sky_collisions"]),
                    tally_rate=float(r["tally_rate"]), p_ground=float(r["ground_share"]),

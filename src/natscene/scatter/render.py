@@ -6,7 +6,6 @@ Defines the forward renderer: the cloud model of Dobashi et al. (2012, Eqs. 3–
 tables, at any view, sun and resolution (the keyframe frames), with the same transport as the precompute:
 
 -   :func:`render`: L_cg (H, W, 3) for one parameter set.
--   :func:`render_settings`: the renderer's settings, a shot's ``render`` section with the schema's defaults.
 
 Common to every transport: the sun optical-depth volume for this sun (:mod:`natscene.scatter.medium`) and the
 ray-marched S_sun, S_amb, T at the given extinction in 1/m (``params["extinction"]``, mu_t = e rho; the tracers
@@ -30,15 +29,7 @@ from natscene.errors import InputError
 from natscene.scatter.params import population
 from natscene.scatter.transport.base import RenderOptions
 
-__all__ = ["render", "render_settings"]
-
-
-def render_settings(section: dict | None = None, key: str = "shots.<name>.render") -> dict:
-    """The forward renderer's settings: ``section`` (a validated ``shots.<name>.render``, a part of one, or None)
-    with each key it lacks the schema's default (:func:`natscene.config.complete_section`: the schema's defaults
-    are the only ones; a bad key or value raises :class:`natscene.errors.ConfigError` naming ``key``)."""
-    from natscene.config import complete_section
-    return complete_section(section, "shots.schema.yaml", ("additionalProperties", "render"), key)
+__all__ = ["render"]
 
 
 def render(volume, camera, sun_dir, params: dict, sky, settings: dict | None = None, *, batch_spp: int | None = None,
@@ -47,7 +38,7 @@ def render(volume, camera, sun_dir, params: dict, sky, settings: dict | None = N
 
     ``sky``: (H, W, 3) linear L_sky at the camera's resolution (or a constant (3,) colour).
     ``settings``: the shot's render section (a validated ``shots.<name>.render``, or a part of one; None: the
-    schema's defaults), through :func:`render_settings`: ``transport``, ``seed``, ``step_voxels``,
+    schema's defaults), through :func:`natscene.scatter.allorders.render_settings`: ``transport``, ``seed``, ``step_voxels``,
     ``supersample``, ``ground_albedo`` (all_orders), ``orders``, ``spp`` (dobashi) and the all-orders transport's
     collision budgets. ``batch_spp``: the dobashi transport's paths per pass (None: automatic).
     ``return_components``: also return a dict with L_s, L_m, L_b, T, t_c, footprint (all_orders: L_m holds
@@ -63,9 +54,9 @@ def render(volume, camera, sun_dir, params: dict, sky, settings: dict | None = N
     from natscene.scatter.tables import geometry_images
     from natscene.scatter.transport import get
 
+    from natscene.scatter.allorders import frame_settings, render_settings
     s = render_settings(settings)
     if all_orders is None:
-        from natscene.scatter.allorders import frame_settings
         all_orders = frame_settings(s)
     model = get(s["transport"], "shots.<name>.render.transport")
     P, p = population(params)

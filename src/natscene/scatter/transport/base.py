@@ -69,7 +69,7 @@ class Arrays:
 @dataclass
 class RenderOptions:
     """The settings of a direct render that the transports read, built by :func:`natscene.scatter.render.render`
-    from its settings (:func:`natscene.scatter.render.render_settings`: the schema's defaults are the only ones)
+    from its settings (:func:`natscene.scatter.allorders.render_settings`: the schema's defaults are the only ones)
     and keywords: ``orders``, ``spp``, ``batch_spp`` (dobashi); ``all_orders`` (the transport's
     :class:`natscene.scatter.allorders.AllOrdersSettings`), ``sky_settings``, ``dome``, ``ground_albedo`` and
     ``skylight`` (all_orders)."""
