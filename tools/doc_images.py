@@ -30,8 +30,9 @@ from pathlib import Path
 
 import cv2
 import numpy as np
-import yaml
 from PIL import Image
+
+from natscene.config import load_yaml_config, validate_config
 
 ROOT = Path(__file__).resolve().parents[1]
 IMG = ROOT / "docs" / "img"
@@ -64,7 +65,9 @@ def main(argv=None) -> int:
     _jpeg(cv2.imread(str(comp / "0000" / "compare.png")), IMG / "composite_compare.jpg")
     for shot in ("day_to_sunset", "sunset_mie"):
         shutil.copyfile(res / "shots" / shot / "filmstrip.png", IMG / f"shot_{shot}_filmstrip.png")
-    fps = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())["shots"]["day_to_sunset"]["fps"]
+    cfg = validate_config(load_yaml_config(ROOT / "config" / "config.yaml"),
+                          ROOT / "workflow" / "schemas" / "config.schema.yaml")
+    fps = cfg["shots"]["day_to_sunset"]["fps"]
     half = [Image.open(f).convert("RGB").reduce(2) for f in frames]
     half[0].save(IMG / "shot_day_to_sunset.gif", save_all=True, append_images=half[1:], duration=int(1000 / fps),
                  loop=0)
