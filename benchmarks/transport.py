@@ -25,6 +25,13 @@ settings), per transport model (`all_orders`, `dobashi`):
 
 Writes results/benchmarks/transport.json. Takes about half an hour on 2 cores (the all-orders precompute
 dominates).   .venv/bin/python benchmarks/transport.py
+
+``--baseline DIR`` (a checkout of an older version, e.g. ``git worktree add /tmp/base 9c1d408``) runs only the
+main job's figures, once on this checkout's code and once on DIR's, each on its own code and config
+(benchmarks/transport_version.py: precompute time and noise, one GA iteration, the 640x480 frame of the main shot
+at the thick cloud's extinction with its noise figure), and writes them with their ratios into the ``versions``
+entry of results/benchmarks/transport.json (made if missing). About 35 min on 2 cores; ``--keep-baseline`` keeps
+the baseline's figures of the previous run and measures this checkout only.
 """
 from __future__ import annotations
 
@@ -213,6 +220,47 @@ def noise_target_only():
     tmp.replace(path)
 
 
+def versions(base: Path, extinction: float = 0.0243, keep_baseline: bool = False):
+    """``--baseline``: transport_version.py on this checkout and on ``base``, each in a subprocess on its own code,
+    written into the ``versions`` entry of results/benchmarks/transport.json. ``keep_baseline``
+    (``--keep-baseline``): measure this checkout only and keep the baseline's figures of the previous run (the
+    same machine; its ``baseline_kept_from_previous_run`` says so)."""
+    import json
+    import os
+    import subprocess
+    import tempfile
+    base = base.resolve()
+    if not (base / "src" / "natscene").is_dir():
+        sys.exit(f"--baseline {base}: not a natscene checkout (no src/natscene)")
+    path = ROOT / "results" / "benchmarks" / "transport.json"
+    result = json.loads(path.read_text()) if path.exists() else {"benchmark": "transport"}
+    figures = {}
+    if keep_baseline:
+        if "baseline" not in result.get("versions", {}):
+            sys.exit(f"--keep-baseline: {path} holds no baseline figures: run without it first")
+        figures["baseline"] = dict(result["versions"]["baseline"], baseline_kept_from_previous_run=True)
+    with tempfile.TemporaryDirectory() as tmp:
+        for name, root in (("current", ROOT), ("baseline", base)):
+            if name in figures:
+                continue
+            out = Path(tmp, f"{name}.json")
+            subprocess.run([sys.executable, str(ROOT / "benchmarks" / "transport_version.py"), "--root", str(root),
+                            "--out", str(out), "--extinction", str(extinction)], check=True,
+                           env={**os.environ, "PYTHONPATH": str(root / "src")})
+            figures[name] = json.loads(out.read_text())
+    cur, old = figures["current"], figures["baseline"]
+    figures["ratio_baseline_over_current"] = {
+        "precompute_s": round(old["precompute_s"] / cur["precompute_s"], 3),
+        "ga_iteration_ms": round(old["ga_iteration_ms"] / cur["ga_iteration_ms"], 3),
+        "frame_640x480_s": round(old["frame_640x480"]["seconds"] / cur["frame_640x480"]["seconds"], 3)}
+    result["versions"] = {k: figures[k] for k in ("current", "baseline", "ratio_baseline_over_current")}
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_suffix(".json.tmp")
+    tmp.write_text(json.dumps(result, indent=2))
+    tmp.replace(path)
+    print(json.dumps(figures, indent=2))
+
+
 def main():
     from natscene.fit.keyframe import fit_keyframe
     from natscene.scatter.allorders import settings_from_config
@@ -269,4 +317,9 @@ def main():
 
 
 if __name__ == "__main__":
-    noise_target_only() if "--noise-target" in sys.argv[1:] else main()
+    if "--noise-target" in sys.argv[1:]:
+        noise_target_only()
+    elif "--baseline" in sys.argv[1:]:
+        versions(Path(sys.argv[sys.argv.index("--baseline") + 1]), keep_baseline="--keep-baseline" in sys.argv[1:])
+    else:
+        main()
