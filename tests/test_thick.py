@@ -100,23 +100,27 @@ def test_thick_heap_render_by_similarity_matches_volpath(refs, heap_tables, name
 
 def test_white_furnace_at_depth_300():
     """Sun off, a uniform dome of radiance L, beta = 1, the heap at a mean optical depth of 300 over its cloud
-    pixels: radiance L everywhere (2 % in the mean over the cloud)."""
+    pixels: radiance L everywhere (2 % in the mean over the cloud). A run's mean over the cloud scatters by
+    about 1.5 % (its photons' walks are hundreds of collisions long, so few of them light each part of the
+    skin): four runs of 24 M collisions are averaged (standard error about 0.7 %)."""
     vol = blob_volume()
     L = 0.7
-    st = default_settings(AllOrdersSettings, sun_collisions=20_000, sky_collisions=6_000_000, fine_voxels=1,
+    st = default_settings(AllOrdersSettings, sun_collisions=20_000, sky_collisions=24_000_000, fine_voxels=1,
                           coarse_voxels=1, camera_lobe=0.6)
     scene = Scene(vol, Lighting(SUN, uniform_dome(L)), st)
     with np.load(REFS) as z:
         sigma = float(z["blob_t300.params"][0])
-    vi = view_images(scene, CAM, sigma, 0.85, seed=4)
-    c = band_weights(st.sky_bands, vi.sky_ratios, 1.0)[0]
-    sky = np.tensordot(c, np.moveaxis(vi.sky, 1, 0), 1)
     T = march_view(scene.med, CAM, [sigma])["T"][0]
-    img = sky[0] + sky[3] * L + T * L
     cloud = T < 0.9
-    print(f"white furnace, mean depth 300: mean {img[cloud].mean() / L:.4f}, min {img[cloud].min() / L:.3f}, "
-          f"max {img[cloud].max() / L:.3f}")
-    assert abs(img[cloud].mean() / L - 1) <= 0.02
+    means = []
+    for seed in (4, 5, 6, 7):
+        vi = view_images(scene, CAM, sigma, 0.85, seed=seed)
+        c = band_weights(st.sky_bands, vi.sky_ratios, 1.0)[0]
+        sky = np.tensordot(c, np.moveaxis(vi.sky, 1, 0), 1)
+        img = sky[0] + sky[3] * L + T * L
+        means.append(img[cloud].mean() / L)
+    print(f"white furnace, mean depth 300: runs {np.round(means, 4)}, mean {np.mean(means):.4f}")
+    assert abs(np.mean(means) - 1) <= 0.02
 
 
 @pytest.mark.xfail(strict=True, reason="the thin bands read 8 %, 4.6 % and 2.2 % high at the shots' cache cells "
