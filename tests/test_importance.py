@@ -80,8 +80,8 @@ def test_sky_source_power_is_the_irradiance_of_the_box():
     """The power the sky photons carry into the box, with and without the lobe toward the camera, equals the
     analytic flux of a uniform dome of radiance L through the box's faces: π L on the top face and π L / 2 on
     each side face for the upper hemisphere (the R channel), the same with the bottom face for the unit-radiance
-    ground; each photon weighted by 1 / the mixture's pdf over (point, direction). 400,000 photons per source
-    (the lobe at g 0.9 and half the photons): within 1 %."""
+    ground; each photon weighted by 1 / the mixture's pdf. 400,000 photons per source (the lobe at g 0.9 and half
+    the photons): within 1 %."""
     import drjit as dr
     vol, scene = _scene(sky=True)
     ext = scene.sky.hi - scene.sky.lo

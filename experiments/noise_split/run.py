@@ -14,7 +14,9 @@ and the node's seconds and photons:
     make run    # the main job's volumes (results/volumes/cumulus)
     .venv/bin/python experiments/noise_split/run.py 0.005,0.9 0.02,0.9 --lobes 0.7,0.2 0.9,0.2 0.9,0.5
 
-Written to results/experiments/noise_split.json.
+Written to results/experiments/noise_split.json. ``lobe_per_point.patch`` (``git apply`` it) is the sky lobe per
+starting point that docs/stages/precompute.md ("Effort per source") measured and did not keep: the lobe of each
+sky photon around the line from its starting point on the box's far faces to the camera.
 """
 import argparse
 import json

@@ -419,8 +419,7 @@ def view_images(scene: Scene, camera, sigma: float, g: float, seed: int = 0, noi
                         most=st.sun_photons_max, window=win, pilot=16384 if win else 32768)
     jobs = [(scene.sun, n_sun, st.sun_bands, 2, seed, win, 1)]
     if scene.sky is not None:
-        # the lobe toward the camera at least as forward as the node's phase function (its peak is what it samples)
-        sky = (scene.sky.toward(camera.position, max(st.sky_lobe_g, g), st.sky_lobe_share)
+        sky = (scene.sky.toward(camera.position, st.sky_lobe_g, st.sky_lobe_share)
                if st.sky_lobe_share > 0 else scene.sky)
         win = weight_window(scene, sky, sigma, g, camera, seed + 7919) if st.importance else None
         n_sky = photons_for(scene, sky, sigma, g, camera, st.sky_collisions, 10 ** 9, seed + 7919,
