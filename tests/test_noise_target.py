@@ -10,7 +10,8 @@ import pytest
 import natscene  # noqa: F401
 from natscene.config import default_settings
 from natscene.errors import InputError
-from natscene.scatter.allorders import AllOrdersSettings, Lighting, Scene, budget_scale, standard_error, view_images
+from natscene.scatter.allorders import (AllOrdersSettings, Lighting, Scene, budget_scale, source_scales, standard_error,
+                                       view_images)
 from natscene.scatter.bands import band_weights
 from natscene.scatter.tables import precompute
 from natscene.scatter.reference_scene import CAM, SUN, blob_volume
@@ -47,6 +48,31 @@ def test_budget_scale_follows_the_inverse_square_root():
     assert budget_scale((0.02, 0.30), (0.03, 0.10)) == pytest.approx(9.0)
     assert budget_scale((0.02, 0.05), (0.03, 0.10)) == 1.0          # met: no more photons
     assert budget_scale((0.06, 0.30), (0.0, 0.0)) == 1.0            # no target
+
+
+def test_source_scales_reach_the_variance_at_the_least_cost():
+    """The top-up's split between the sun and the sky against a brute-force search: every split on a fine grid
+    of factors >= 1 that brings the summed variance v_sun / x_sun + v_sky / x_sky down by ``need`` costs at
+    least what source_scales' split costs, and that split reaches it; equal shares give both ``need``; a source
+    without variance gets nothing more."""
+    assert source_scales((1.0, 1.0), (5.0, 5.0), 4.0) == pytest.approx([4.0, 4.0])
+    assert source_scales((0.0, 2.0), (1.0, 3.0), 6.0) == pytest.approx([1.0, 6.0])
+    assert source_scales((1.0, 1.0), (1.0, 1.0), 1.0) == [1.0, 1.0]
+    grid = np.exp(np.linspace(0.0, np.log(200.0), 4001))
+    for v, c, need in (((1.0, 9.0), (1.0, 1.0), 4.0), ((1.0, 9.0), (8.0, 3.0), 2.5), ((3.0, 0.2), (1.0, 2.0), 8.0),
+                       ((1.0, 1.0), (1.0, 100.0), 3.0), ((0.05, 1.0), (1.0, 1.0), 1.5)):
+        x = source_scales(v, c, need)
+        assert min(x) >= 1.0
+        assert (v[0] / x[0] + v[1] / x[1]) == pytest.approx(sum(v) / need, rel=1e-9)
+        # for each x_sun on the grid the least x_sky that reaches the target; the cheapest of those
+        left = sum(v) / need - v[0] / grid
+        ok = left > 0
+        x_sky = np.maximum(v[1] / np.where(ok, left, 1.0), 1.0)
+        best = float(np.min((c[0] * grid + c[1] * x_sky)[ok]))
+        cost = c[0] * x[0] + c[1] * x[1]
+        print(v, c, need, np.round(x, 3), round(cost, 4), round(best, 4))
+        assert cost <= best * (1 + 1e-4)
+        assert cost >= best * (1 - 2e-3)          # the grid's resolution
 
 
 def test_a_topped_up_node_meets_its_target_with_the_error_it_estimates():

@@ -60,7 +60,7 @@ import numpy as np
 from natscene.scatter.bands import SKY_BANDS, SUN_BANDS, fit_ratios
 
 __all__ = ["AllOrdersSettings", "settings_from_config", "render_settings", "frame_settings", "Lighting", "Scene",
-           "ViewImages", "view_images", "standard_error", "budget_scale"]
+           "ViewImages", "view_images", "standard_error", "budget_scale", "source_scales"]
 
 FINE_UP_TO_ORDER = 4
 
@@ -363,14 +363,47 @@ def budget_scale(noise: tuple, target: tuple) -> float:
     return need
 
 
-def view_images(scene: Scene, camera, sigma: float, g: float, seed: int = 0, noise=None) -> ViewImages:
+def source_scales(variances, costs, need: float) -> list:
+    """Factors (each >= 1) by which to multiply each source's photons so that the summed variance of a node's
+    pixel, ``sum(variances)``, falls by ``need`` at the least cost (Neyman allocation; ``costs``: each source's
+    cost so far, its variance falling as 1 / its photons). Minimising sum c_i x_i under sum v_i / x_i = V*
+    gives x_i = sqrt(v_i / c_i) sum_j sqrt(v_j c_j) / V*; a source whose x_i would fall below 1 (its photons
+    are traced already) keeps them, and the others share what remains. Equal shares give ``need`` for every
+    source; a source without variance gets no more photons."""
+    v = [max(float(x), 0.0) for x in variances]
+    c = [max(float(x), 1e-30) for x in costs]
+    target = sum(v) / float(need)
+    if sum(v) <= 0 or need <= 1.0:
+        return [1.0] * len(v)
+    free = list(range(len(v)))
+    x = [1.0] * len(v)
+    while free:
+        left = target - sum(v[i] for i in range(len(v)) if i not in free)
+        if left <= 0:                                  # the fixed sources alone exceed the target: all of them
+            return [float(need)] * len(v)
+        total = sum(np.sqrt(v[i] * c[i]) for i in free)
+        for i in free:
+            x[i] = np.sqrt(v[i] / c[i]) * total / left
+        low = [i for i in free if x[i] < 1.0]
+        if not low:
+            break
+        for i in low:
+            x[i] = 1.0
+            free.remove(i)
+    return [float(max(xi, 1.0)) for xi in x]
+
+
+def view_images(scene: Scene, camera, sigma: float, g: float, seed: int = 0, noise=None,
+                split=None) -> ViewImages:
     """Band images of the sun's and the sky's light at (sigma, g) for ``camera`` (see the module docstring).
 
     ``noise``: a function of the :class:`ViewImages` that returns the node's relative standard error (median,
-    p95 over its cloud pixels). With it and a ``noise_target``, the node is topped up (more photons of both
-    sources, fresh seeds, merged into the halves) until the error meets the target, at most twice and to at most
-    ``max_budget_scale`` times the collision budget's photons: the noisy nodes (thick, strongly forward
-    scattering) get the photons, a node already within the target none."""
+    p95 over its cloud pixels). With it and a ``noise_target``, a node that misses the target is topped up (more
+    photons, fresh seeds, merged into the halves), at most twice and to at most ``max_budget_scale`` times each
+    source's budget: the noisy nodes (thick, strongly forward scattering) get the photons, a node within the
+    target none. ``split``: a function of the :class:`ViewImages` that returns the sun's and the sky's shares
+    of the pixel's variance; with it the top-up goes to the sources by :func:`source_scales` (costs: their
+    collisions), without it both sources get the same factor."""
     st = scene.settings
     H, W = camera.height, camera.width
     nb_sun, nb_sky = len(st.sun_bands), len(st.sky_bands)
@@ -386,16 +419,18 @@ def view_images(scene: Scene, camera, sigma: float, g: float, seed: int = 0, noi
                         most=st.sun_photons_max, window=win, pilot=16384 if win else 32768)
     jobs = [(scene.sun, n_sun, st.sun_bands, 2, seed, win, 1)]
     if scene.sky is not None:
-        sky = (scene.sky.toward(camera.position, st.sky_lobe_g, st.sky_lobe_share) if st.sky_lobe_share > 0
-               else scene.sky)
+        sky = (scene.sky.toward(camera.position, st.sky_lobe_g, st.sky_lobe_share)
+               if st.sky_lobe_share > 0 else scene.sky)
         win = weight_window(scene, sky, sigma, g, camera, seed + 7919) if st.importance else None
         n_sky = photons_for(scene, sky, sigma, g, camera, st.sky_collisions, 10 ** 9, seed + 7919,
                             most=st.sky_photons_max, window=win, pilot=16384 if win else 32768)
         jobs.append((sky, n_sky, st.sky_bands, 1, seed + 7919, win, 4))
 
-    def run(scale: float, round_: int) -> list:
-        return [_part(scene, src, sigma, g, camera, max(2, int(round(n * scale))), bands, k_min,
-                      s + 1_000_003 * round_, depth, w, ch, vint) for src, n, bands, k_min, s, w, ch in jobs]
+    def run(scales, round_: int) -> list:
+        return [None if sc <= 0 else
+                _part(scene, src, sigma, g, camera, max(2, int(round(n * sc))), bands, k_min,
+                      s + 1_000_003 * round_, depth, w, ch, vint)
+                for (src, n, bands, k_min, s, w, ch), sc in zip(jobs, scales)]
 
     def result(parts) -> ViewImages:
         sun, sky = parts[0], (parts[1] if len(parts) > 1 else None)
@@ -406,17 +441,25 @@ def view_images(scene: Scene, camera, sigma: float, g: float, seed: int = 0, noi
                           fit_ratios(st.sun_bands, sun.histogram),
                           None if sky is None else fit_ratios(st.sky_bands, sky.histogram), stats)
 
-    parts = run(1.0, 0)
+    parts = run([1.0] * len(jobs), 0)
     vi = result(parts)
-    scale = 1.0
+    budget = [p.collisions for p in parts]              # each source's cost at its budget
+    scales = [1.0] * len(jobs)
     if noise is not None and max(st.noise_target) > 0:
         for round_ in (1, 2):
-            est = noise(vi)
-            want = min(scale * budget_scale(est, st.noise_target) * 1.1, float(st.max_budget_scale))
-            if want <= scale * 1.05:
+            need = budget_scale(noise(vi), st.noise_target)
+            if need <= 1.0:
                 break
-            parts = [a.merged(b) for a, b in zip(parts, run(want - scale, round_))]
-            scale = want
+            need *= 1.1
+            x = (source_scales(split(vi), [p.collisions for p in parts], need)
+                 if split is not None and len(parts) > 1 else [need] * len(parts))
+            want = [min(sc * xi, float(st.max_budget_scale)) for sc, xi in zip(scales, x)]
+            extra = [w - sc if w > sc * 1.05 else 0.0 for w, sc in zip(want, scales)]
+            if not any(extra):
+                break
+            parts = [p if q is None else p.merged(q) for p, q in zip(parts, run(extra, round_))]
+            scales = [sc + e for sc, e in zip(scales, extra)]
             vi = result(parts)
-        vi.stats["budget_scale"] = scale
+        vi.stats["budget_scale"] = float(np.dot(scales, budget) / max(sum(budget), 1))
+        vi.stats["source_budget_scales"] = scales
     return vi

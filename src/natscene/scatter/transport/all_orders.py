@@ -52,7 +52,7 @@ except Exception:  # noqa: BLE001
     _nb = None
 
 __all__ = ["AllOrders", "NOISE_BETAS", "composed_halves", "frame_dome", "node_noise", "sky_luminance_weights",
-           "skylight_dome", "target_figure"]
+           "skylight_dome", "source_variances", "target_figure"]
 
 SKY_CHANNELS = ("R", "G", "B", "ground")
 _KERNEL = None
@@ -142,6 +142,23 @@ def node_noise(vi, sun_bands, sky_bands, sky_w, foot, single_sun) -> dict:
     return out
 
 
+def source_variances(vi, sun_bands, sky_bands, sky_w, foot, single_sun) -> tuple[float, float]:
+    """The sun's and the sky's shares of one node's pixel variance: the mean over its cloud pixels of each
+    source's squared two-halves standard error (:func:`natscene.scatter.allorders.standard_error`) relative to
+    the composed pixel (as ``pixel`` of :func:`node_noise`), averaged over :data:`NOISE_BETAS`; what
+    :func:`natscene.scatter.allorders.source_scales` divides a top-up by."""
+    from natscene.scatter.allorders import standard_error
+    v = np.zeros(2)
+    for b in NOISE_BETAS:
+        h = composed_halves(vi, sun_bands, sky_bands, sky_w, b)
+        sky = [h["sun_and_sky"][i] - h["sun"][i] for i in range(2)]
+        pixel = b * single_sun + (h["sun_and_sky"][0] + h["sun_and_sky"][1]) / 2
+        ok = foot & (pixel > 0)
+        for n, (x, y) in enumerate((h["sun"], sky)):
+            v[n] += float(np.mean((standard_error(x, y)[ok] / pixel[ok]) ** 2)) if ok.any() else 0.0
+    return float(v[0] / len(NOISE_BETAS)), float(v[1] / len(NOISE_BETAS))
+
+
 def _multiple(volume, camera, sun_dir, sigmas, gs, settings, sky, seed, log, single):
     """Band images of the sun's and the sky's light over the (g, extinction) grid, their ratios and noise
     (``sigmas``: the volume's unitless sigma_t of each node; ``single``: the precompute's
@@ -169,7 +186,7 @@ def _multiple(volume, camera, sun_dir, sigmas, gs, settings, sky, seed, log, sin
     foot = single["footprint"] > 0
     counts = {"sun_photons": 0, "sun_collisions": 0, "sky_photons": 0, "sky_collisions": 0}
     truncated = 0.0
-    scales = []
+    scales, source_scales = [], []
     todo = [(i, j) for i in range(Ns) if sigmas[i] > 0 for j in range(Ng)]
     t0 = time.perf_counter()
     for n, (i, j) in enumerate(todo):
@@ -179,7 +196,8 @@ def _multiple(volume, camera, sun_dir, sigmas, gs, settings, sky, seed, log, sin
             return node_noise(vi, sb, kb, sky_w, foot, single_sun)
 
         vi = view_images(scene, camera, float(sigmas[i]), float(gs[j]), seed=seed * 100003 + i * 101 + j,
-                         noise=lambda vi: target_figure(figures(vi)))
+                         noise=lambda vi: target_figure(figures(vi)),
+                         split=lambda vi: source_variances(vi, sb, kb, sky_w, foot, single_sun))
         sun_ms[:, j, i] = vi.sun
         sky_ms[:, :, j, i] = vi.sky
         sun_r[j, i], sky_r[j, i] = vi.sun_ratios, vi.sky_ratios
@@ -187,11 +205,12 @@ def _multiple(volume, camera, sun_dir, sigmas, gs, settings, sky, seed, log, sin
             counts[k] += int(vi.stats.get(k, 0))
         truncated = max(truncated, vi.stats.get("sun_truncated", 0.0))
         scales.append(float(vi.stats.get("budget_scale", 1.0)))
+        source_scales.append([round(float(x), 3) for x in vi.stats.get("source_budget_scales", [1.0, 1.0])])
         for k, v in figures(vi).items():
             noise[k].append(v)
         el = time.perf_counter() - t0
         log(f"all orders extinction={sigmas[i] * volume.extinction_scale:.4g}/m g={gs[j]:g}: {vi.stats.get('sun_photons', 0)} sun + "
-            f"{vi.stats.get('sky_photons', 0)} sky photons (budget x{scales[-1]:.2f}; {n + 1}/{len(todo)}, {el:.0f} s, "
+            f"{vi.stats.get('sky_photons', 0)} sky photons (budget x{scales[-1]:.2f}: sun x{source_scales[-1][0]:.2f}, sky x{source_scales[-1][-1]:.2f}; {n + 1}/{len(todo)}, {el:.0f} s, "
             f"about {el / (n + 1) * (len(todo) - n - 1):.0f} s left)")
     dirs = camera.ray_directions()
     view_rgb = preetham_rgb(dirs.reshape(-1, 3), sun_dir, sky.turbidity, sky.zenith_luminance, sky.reference_elevation,
@@ -207,6 +226,8 @@ def _multiple(volume, camera, sun_dir, sigmas, gs, settings, sky, seed, log, sin
         # photons per node as a multiple of the collision budget's (noise_target tops the noisy nodes up),
         # per node, extinction > 0 in order, g within each extinction
         "budget_scale": [round(x, 3) for x in scales],
+        # the same per source (sun, sky): the top-ups go where the pixel's variance is (source_variances)
+        "source_budget_scales": source_scales,
         "settings": {"sun_collisions": int(settings.sun_collisions), "sky_collisions": int(settings.sky_collisions),
                      "sun_photons_max": int(settings.sun_photons_max), "sky_photons_max": int(settings.sky_photons_max),
                      "fine_voxels": int(settings.fine_voxels), "coarse_voxels": int(settings.coarse_voxels),
