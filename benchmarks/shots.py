@@ -16,8 +16,8 @@ settings (config shots.day_to_sunset.render: 16 spp, orders up to 4), each numbe
 - side-by-side crops for the docs: Dobashi raw | denoised | all-orders raw | denoised (shots_denoise.png) and
   Mie | HG around the hidden sun (shots_mie_sunset.png), in results/benchmarks/.
 
-The day frame is the kite view with the kite fit's parameters (keyframe 0 of day_to_sunset). Wall times on
-this machine vary with the load of other jobs: the load average is recorded; compare ratios.
+The day frame is keyframe 0 of day_to_sunset (the kite fit with the shot's explicit parameters and sun). Wall
+times on this machine vary with the load of other jobs: the load average is recorded; compare ratios.
 
 Usage: nice .venv/bin/python benchmarks/shots.py [--volume results/volumes/cumulonimbus] [--skip-1080]
 """
@@ -128,7 +128,10 @@ def main():
     shot = {**day, "phase": "hg", "denoise": "oidn"}
     cam = dict(day["keyframes"][0]["camera"])                # the day shot's first camera (metres)
     cam.setdefault("up", [0, 1, 0])
-    state = shot_state(_kite_params(), 120.0, 30.0, cam)
+    # keyframe 0: the kite fit with the shot's explicit parameters (its storm cloud's extinction) and sun
+    sun0 = day["keyframes"][0].get("sun") or cfg["views"]["kite"]["sun"]
+    state = shot_state({**_kite_params(), **day["keyframes"][0].get("params", {})}, float(sun0["azimuth"]),
+                       float(sun0["elevation"]), cam)
     render_shot_frame(vol, state, {**shot, "resolution": [32, 24], "render": {**shot["render"], "spp": 1}},
                       denoiser=oidn)                                         # compile the kernels once
     load0 = os.getloadavg()[0]
