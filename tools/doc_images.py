@@ -9,17 +9,17 @@ Writes into docs/img/:
 - ``composite_detail.png``: two crops of frame 0 (rows 250-480, columns 0-330: the beetles and leaves; rows 170-400,
   columns 310-640: the flowers) side by side, enlarged twice (nearest neighbour);
 - ``composite_compare.jpg``: frame 0's hybrid | full-spectral | CIEDE2000 sheet (``.../0000/compare.png``);
+- ``fit_kite_all_orders.jpg``: the kite fit's contact sheet (``fit/kite/contact_sheet.png``) at 2/3 of its size;
 - ``shot_day_to_sunset_filmstrip.png``, ``shot_sunset_mie_filmstrip.png``: the shots' ``filmstrip.png`` as they
   are;
 - ``shot_day_to_sunset.gif``: the shot's frames (``shots/day_to_sunset/frames/*.png``) at half size, at the shot's
   ``fps`` from ``config/config.yaml``;
-- ``shot_day_cloud_unitless_vs_physical.png``, its right half: the day frame's cloud (frame 0, rows 0-150,
-  columns 190-430) at twice its size (bicubic); the left half, the same crop of the frame with the sigma_t
-  normalised per volume, is kept (no config makes it any more);
 - ``textures_<name>.jpg``: each ``textures/<name>/compare.png`` the docs show, and ``textures_wood_completion.jpg``
   from ``textures/wood/completion_compare.png``.
 
-JPEG quality 90 (OpenCV). Nothing is written unless every source exists.
+JPEG quality 90 (OpenCV). Nothing is written unless every source exists. ``shot_day_cloud_unitless_vs_physical.png``
+(the day frame's cloud with the sigma_t normalised per volume and at the physical extinction, both under the
+earlier day sun at azimuth 120) is kept as it is: no config makes either half any more.
 """
 from __future__ import annotations
 
@@ -51,7 +51,7 @@ def main(argv=None) -> int:
     frames = sorted((res / "shots" / "day_to_sunset" / "frames").glob("[0-9][0-9][0-9][0-9].png"))
     sources = [comp / "0000" / "final.png", comp / "0023" / "final.png", comp / "0000" / "compare.png",
                res / "shots" / "day_to_sunset" / "filmstrip.png", res / "shots" / "sunset_mie" / "filmstrip.png",
-               res / "textures" / "wood" / "completion_compare.png",
+               res / "textures" / "wood" / "completion_compare.png", res / "fit" / "kite" / "contact_sheet.png",
                *(res / "textures" / t / "compare.png" for t in TEXTURES)]
     missing = [str(p) for p in sources if not p.is_file()] + ([] if frames else ["shots/day_to_sunset/frames/*.png"])
     if missing:
@@ -63,6 +63,8 @@ def main(argv=None) -> int:
     detail = np.concatenate([day[250:480, 0:330], day[170:400, 310:640]], 1)
     cv2.imwrite(str(IMG / "composite_detail.png"), cv2.resize(detail, None, fx=2, fy=2, interpolation=cv2.INTER_NEAREST))
     _jpeg(cv2.imread(str(comp / "0000" / "compare.png")), IMG / "composite_compare.jpg")
+    sheet = cv2.imread(str(res / "fit" / "kite" / "contact_sheet.png"))
+    _jpeg(cv2.resize(sheet, None, fx=2 / 3, fy=2 / 3, interpolation=cv2.INTER_AREA), IMG / "fit_kite_all_orders.jpg")
     for shot in ("day_to_sunset", "sunset_mie"):
         shutil.copyfile(res / "shots" / shot / "filmstrip.png", IMG / f"shot_{shot}_filmstrip.png")
     cfg = validate_config(load_yaml_config(ROOT / "config" / "config.yaml"),
@@ -71,10 +73,6 @@ def main(argv=None) -> int:
     half = [Image.open(f).convert("RGB").reduce(2) for f in frames]
     half[0].save(IMG / "shot_day_to_sunset.gif", save_all=True, append_images=half[1:], duration=int(1000 / fps),
                  loop=0)
-    pair = cv2.imread(str(IMG / "shot_day_cloud_unitless_vs_physical.png"))
-    frame0 = cv2.imread(str(frames[0]))
-    pair[:, -480:] = cv2.resize(frame0[0:150, 190:430], (480, 300), interpolation=cv2.INTER_CUBIC)
-    cv2.imwrite(str(IMG / "shot_day_cloud_unitless_vs_physical.png"), pair)
     for t in TEXTURES:
         _jpeg(cv2.imread(str(res / "textures" / t / "compare.png")), IMG / f"textures_{t}.jpg")
     _jpeg(cv2.imread(str(res / "textures" / "wood" / "completion_compare.png")), IMG / "textures_wood_completion.jpg")
