@@ -30,9 +30,12 @@ __all__ = ["sky_order1"]
 
 
 @dr.syntax
-def _paths(med, grid, o, d, sig_k, gs, rng):
-    """Per lane: lit (the shadow ray escaped), the direction toward the source, cos(w_in, w_cam)."""
+def _paths(med, grid, o, d, sig_k, gs, rng, tries: int = 1):
+    """Per lane: lit (the shadow ray escaped), the direction toward the source, cos(w_in, w_cam). ``tries`` > 1: a
+    camera ray that leaves the box without a collision starts again, up to ``tries`` times (a collision forced by
+    rejection: its density is T_cam mu_t / (1 - T), the caller weights it by 1 - T)."""
     n = dr.width(d)
+    left = mi.UInt32(tries - 1)
     p, w = mi.Point3f(o), mi.Vector3f(d)
     to_cam = -mi.Vector3f(d)
     t_in, t_out = ray_box_dr(p, w, med.bbox_min, med.bbox_max)
@@ -69,16 +72,24 @@ def _paths(med, grid, o, d, sig_k, gs, rng):
         t1 = dr.select(turn, b, t1)
         tau = dr.select(turn, -dr.log(1.0 - rng.next_float32()), tau)
         lit = lit | (shadow & escaped)
-        done = (shadow & (accept | escaped)) | (~shadow & escaped)
+        again = ~shadow & escaped & (left > 0)
+        left = dr.select(again, left - 1, left)
+        t = dr.select(again, t_in, t)
+        tau = dr.select(again, -dr.log(1.0 - rng.next_float32()), tau)
+        done = (shadow & (accept | escaped)) | (~shadow & escaped & ~again)
         shadow = shadow | turn
-        restart = turn
+        restart = turn | again
         flying = flying & ~done
     return lit, mi.Vector3f(w), cos_t
 
 
-def sky_order1(med, grid, camera, sig_k: float, gs, sky, spp: int, seed: int = 0, batch: int = 1 << 21):
+def sky_order1(med, grid, camera, sig_k: float, gs, sky, spp: int, seed: int = 0, batch: int = 1 << 21,
+               opacity=None, tries: int = 64):
     """(4 channels, len(gs), H, W) float32: the sky's order-1 band images at mu_t = ``sig_k`` rho for each g of
-    ``gs`` (``sky``: a :class:`natscene.scatter.photons.SkySource`), ``spp`` paths per pixel."""
+    ``gs`` (``sky``: a :class:`natscene.scatter.photons.SkySource`), ``spp`` paths per pixel. ``opacity``: the
+    pixels' 1 - T (H, W; :func:`natscene.scatter.single.march_view` at the pixels' centres): with it the camera
+    rays go through the pixels' centres, each collision is forced by up to ``tries`` restarts and weighted by the
+    pixel's opacity."""
     H, W = camera.height, camera.width
     gs = [float(g) for g in gs]
     out = np.zeros((4, len(gs), H * W), np.float64)
@@ -87,12 +98,15 @@ def sky_order1(med, grid, camera, sig_k: float, gs, sky, spp: int, seed: int = 0
         pix = np.arange(r0 * W, min(H, r0 + rows) * W)
         rng = mi.PCG32(size=len(pix) * spp, initstate=dr.arange(mi.UInt64, len(pix) * spp) + r0 * W * spp,
                        initseq=mi.UInt64(int(seed) * 7919 + 3))
-        o, d, _ = camera_rays(camera, spp, rng=rng, pixels=pix)
-        lit, om, cos_t = _paths(med, grid, o, d, float(sig_k), gs, rng)
+        forced = opacity is not None
+        o, d, pidx = camera_rays(camera, spp, rng=None if forced else rng, pixels=pix)
+        lit, om, cos_t = _paths(med, grid, o, d, float(sig_k), gs, rng, tries if forced else 1)
         _, rad = sky._pdf_radiance(om)
         q = sum(hg_dr(cos_t, g) for g in gs) / len(gs)
+        a = (dr.gather(mi.Float, mi.Float(np.asarray(opacity, np.float32).ravel()), pidx) if forced
+             else mi.Float(1.0))
         for j, g in enumerate(gs):
-            wj = dr.select(lit, hg_dr(cos_t, g) / q, 0.0)
+            wj = dr.select(lit, a * hg_dr(cos_t, g) / q, 0.0)
             for c in range(4):
                 v = dr.block_sum(wj * rad[c], spp) / spp
                 out[c, j, pix] = np.asarray(v, np.float64)

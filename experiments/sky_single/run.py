@@ -8,9 +8,10 @@ relative to the composed pixel at beta 0.99 (median / p95 over the footprint), a
 ``view_images`` (both sources) and the paths' pass for all the g values:
 
     make run    # the main job's volumes (results/volumes/cumulus)
-    .venv/bin/python experiments/sky_single/run.py 0.005 0.02 0.08 --g 0.75 0.9 --spp 32
+    .venv/bin/python experiments/sky_single/run.py 0.005 0.02 0.08 --g 0.75 0.9 --spp 32 [--forced]
 
-Written to results/experiments/sky_single.json.
+Written to results/experiments/sky_single.json (``--forced``: sky_single_forced.json; collisions forced along the
+camera ray, see :func:`estimator.sky_order1`).
 """
 import argparse
 import json
@@ -43,6 +44,7 @@ def main():
     ap.add_argument("extinctions", nargs="+", type=float, help="1/m")
     ap.add_argument("--g", nargs="+", type=float, default=[0.75, 0.9])
     ap.add_argument("--spp", type=int, default=32, help="paths per pixel and half")
+    ap.add_argument("--forced", action="store_true", help="collisions forced along the camera ray (estimator.py)")
     a = ap.parse_args()
     cfg = validate_config(load_yaml_config(ROOT / "config/config.yaml"), ROOT / "workflow/schemas/config.schema.yaml")
     pre, view = cfg["precompute"], cfg["views"]["kite"]
@@ -63,7 +65,11 @@ def main():
                             supersample=pre["supersample"], rho_threshold=pre["rho_threshold"])
         foot = single["footprint"] > 0
         t0 = time.perf_counter()
-        paths = [sky_order1(scene.med, scene.grid, camera, sig_k, a.g, scene.sky, a.spp, seed=s) for s in (1, 2)]
+        centre = march_view(scene.med, camera, [sigma], step_voxels=pre["step_voxels"], supersample=1,
+                            rho_threshold=pre["rho_threshold"])
+        opacity = 1 - centre["T"][0] if a.forced else None
+        paths = [sky_order1(scene.med, scene.grid, camera, sig_k, a.g, scene.sky, a.spp, seed=s, opacity=opacity)
+                 for s in (1, 2)]
         t_paths = time.perf_counter() - t0
         for j, g in enumerate(a.g):
             t0 = time.perf_counter()
@@ -90,7 +96,7 @@ def main():
                                                                 ((ph1[0] + ph1[1]) / 2)[opaque].mean()), 4)
             out[f"{e:g}/m g {g:g}"] = row
             print(f"{e:g}/m g {g:g}:", json.dumps(row), flush=True)
-    dest = ROOT / "results/experiments/sky_single.json"
+    dest = ROOT / f"results/experiments/sky_single{'_forced' if a.forced else ''}.json"
     dest.parent.mkdir(parents=True, exist_ok=True)
     dest.write_text(json.dumps(out, indent=1))
 
