@@ -126,12 +126,11 @@ def main():
         vol, _ = build_volume(cfg["volumes"]["cumulonimbus"], "cumulonimbus")
     oidn = OIDN(key="benchmark", threads=2)
     shot = {**day, "phase": "hg", "denoise": "oidn"}
-    cam = dict(day["keyframes"][0]["camera"])                # the day shot's first camera (metres)
-    cam.setdefault("up", [0, 1, 0])
-    # keyframe 0: the kite fit with the shot's explicit parameters (its storm cloud's extinction) and sun
-    sun0 = day["keyframes"][0].get("sun") or cfg["views"]["kite"]["sun"]
-    state = shot_state({**_kite_params(), **day["keyframes"][0].get("params", {})}, float(sun0["azimuth"]),
-                       float(sun0["elevation"]), cam)
+    # keyframe 0 as the interpolate rule resolves it: the kite fit with the shot's explicit parameters (its storm
+    # cloud's extinction), its sun and its camera (metres)
+    fitted = {"chosen": _kite_params()}
+    r0 = resolve_keyframe("day_to_sunset", 0, day["keyframes"][0], cfg)
+    state = frame_state(r0["at"], [{**r0, "params": keyframe_params(r0, fitted)}])
     render_shot_frame(vol, state, {**shot, "resolution": [32, 24], "render": {**shot["render"], "spp": 1}},
                       denoiser=oidn)                                         # compile the kernels once
     load0 = os.getloadavg()[0]
@@ -158,7 +157,6 @@ def main():
     log(f"640x480: {res['seconds_frame_640x480']} s, noise figure {n_raw:.4f} -> {n_den:.4f}")
 
     # --- the shot's other keyframes (warmer light, the sun at el 15 and 3 deg): their noise figure
-    fitted = {"chosen": _kite_params()}
     res["noise_figure_raw_keyframes"] = {}
     for i, kf in enumerate(day["keyframes"][1:], start=1):
         r = resolve_keyframe("day_to_sunset", i, kf, cfg)
