@@ -121,6 +121,13 @@ def composed_halves(vi, sun_bands, sky_bands, sky_w, beta: float) -> dict:
     return {"sun": sun, "sky": sky, "sun_and_sky": both}
 
 
+def _pixel(half_a, half_b, beta: float, single_sun, foot):
+    """The composed cloud pixel at albedo ``beta`` (single scattering ``beta * single_sun`` plus the mean of the
+    two halves of the multiple scattering) and the footprint's pixels with light."""
+    pixel = beta * single_sun + (half_a + half_b) / 2
+    return pixel, foot & (pixel > 0)
+
+
 def node_noise(vi, sun_bands, sky_bands, sky_w, foot, single_sun) -> dict:
     """Per-pixel relative standard error of one node's composed multiple scattering (two-halves estimate,
     :func:`natscene.scatter.allorders.standard_error`) over its cloud pixels, per ``<part>.beta<b>``: the sun's
@@ -136,8 +143,7 @@ def node_noise(vi, sun_bands, sky_bands, sky_w, foot, single_sun) -> dict:
             ok = foot & (m > 0)
             out[f"{part}.beta{b:g}"] = (se[ok] / m[ok]).astype(np.float32)
             if part == "sun_and_sky":          # the same error over the composed cloud pixel
-                pixel = b * single_sun + m
-                ok = foot & (pixel > 0)
+                pixel, ok = _pixel(x, y, b, single_sun, foot)
                 out[f"pixel.beta{b:g}"] = (se[ok] / pixel[ok]).astype(np.float32)
     return out
 
@@ -152,8 +158,7 @@ def source_variances(vi, sun_bands, sky_bands, sky_w, foot, single_sun) -> tuple
     for b in NOISE_BETAS:
         h = composed_halves(vi, sun_bands, sky_bands, sky_w, b)
         sky = [h["sun_and_sky"][i] - h["sun"][i] for i in range(2)]
-        pixel = b * single_sun + (h["sun_and_sky"][0] + h["sun_and_sky"][1]) / 2
-        ok = foot & (pixel > 0)
+        pixel, ok = _pixel(*h["sun_and_sky"], b, single_sun, foot)
         for n, (x, y) in enumerate((h["sun"], sky)):
             v[n] += float(np.mean((standard_error(x, y)[ok] / pixel[ok]) ** 2)) if ok.any() else 0.0
     return float(v[0] / len(NOISE_BETAS)), float(v[1] / len(NOISE_BETAS))
