@@ -23,8 +23,7 @@ import mitsuba as mi
 
 from natscene.scatter.majorant import flight_event
 from natscene.scatter.medium import ray_box_dr
-from natscene.scatter.phase import hg_dr
-from natscene.scatter.photons import _scatter_dir
+from natscene.scatter.phase import hg_dr, hg_sample_cos_dr
 from natscene.scatter.rays import camera_rays
 
 __all__ = ["sky_order1"]
@@ -61,13 +60,16 @@ def _paths(med, grid, o, d, sig_k, gs, rng, tries: int = 1):
         g_m = mi.Float(gs[0])
         for m in range(1, ng):
             g_m = dr.select(u >= m, gs[m], g_m)
-        w_in = _scatter_dir(to_cam, g_m, rng)
-        cos_t = dr.select(turn, dr.dot(w_in, to_cam), cos_t)
+        cos_s = hg_sample_cos_dr(rng.next_float32(), g_m)
+        phi = 2.0 * dr.pi * rng.next_float32()
+        sin_s = dr.safe_sqrt(1.0 - cos_s * cos_s)
+        w_in = dr.normalize(mi.Frame3f(to_cam).to_world(mi.Vector3f(sin_s * dr.cos(phi), sin_s * dr.sin(phi), cos_s)))
+        cos_t = dr.select(turn, cos_s, cos_t)
         p = dr.select(turn, x, p)
         w = dr.select(turn, -w_in, w)
-        _, t_exit = ray_box_dr(x, -w_in, med.bbox_min, med.bbox_max)
+        a, b = ray_box_dr(x, -w_in, med.bbox_min, med.bbox_max)
         t = dr.select(turn, 0.0, t)
-        t1 = dr.select(turn, t_exit, t1)
+        t1 = dr.select(turn, b, t1)
         tau = dr.select(turn, -dr.log(1.0 - rng.next_float32()), tau)
         lit = lit | (shadow & escaped)
         again = ~shadow & escaped & (left > 0)
