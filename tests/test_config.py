@@ -23,8 +23,8 @@ def test_bundled_configs_are_valid(name):
 
 def test_gpu_overlay_merges_onto_the_main_job():
     """config/gpu.yaml is an overlay (two --configfile arguments): merged the way Snakemake merges them, the
-    main job keeps its sections, its photon budget and its noise target, its nodes may be topped up to 32x (not
-    8x), and the result is valid."""
+    main job keeps its sections, its photon budget and its noise target, its nodes may be topped up to 64x (not
+    16x), and the result is valid."""
     from snakemake.utils import update_config
     main = load_yaml_config(ROOT / "config" / "config.yaml")
     cfg = copy.deepcopy(main)
@@ -35,7 +35,7 @@ def test_gpu_overlay_merges_onto_the_main_job():
         validate_config(copy.deepcopy(main), SCHEMA)["volumes"]
     for key in ("sun_collisions", "sky_collisions", "noise_target"):
         assert ao[key] == main_ao[key], key
-    assert main_ao["max_budget_scale"] == 8 and ao["max_budget_scale"] == 32
+    assert main_ao["max_budget_scale"] == 16 and ao["max_budget_scale"] == 64
 
 
 def test_defaults_are_filled_inside_referenced_sections(smoke):

@@ -54,10 +54,14 @@ def test_source_scales_reach_the_variance_at_the_least_cost():
     """The top-up's split between the sun and the sky against a brute-force search: every split on a fine grid
     of factors >= 1 that brings the summed variance v_sun / x_sun + v_sky / x_sky down by ``need`` costs at
     least what source_scales' split costs, and that split reaches it; equal shares give both ``need``; a source
-    without variance gets nothing more."""
+    without variance gets nothing more; a fixed variance is left to the sources' target."""
     assert source_scales((1.0, 1.0), (5.0, 5.0), 4.0) == pytest.approx([4.0, 4.0])
     assert source_scales((0.0, 2.0), (1.0, 3.0), 6.0) == pytest.approx([1.0, 6.0])
     assert source_scales((1.0, 1.0), (1.0, 1.0), 1.0) == [1.0, 1.0]
+    # a variance no photons lower (the sky's order 1 by shadow rays): 3 -> 1.5 leaves the sources 0.5 of their 2;
+    # where it alone is over the target, the sources' own variance falls by ``need``
+    assert source_scales((1.0, 1.0), (1.0, 1.0), 2.0, fixed=1.0) == pytest.approx([4.0, 4.0])
+    assert source_scales((1.0, 1.0), (1.0, 1.0), 2.0, fixed=10.0) == pytest.approx([2.0, 2.0])
     grid = np.exp(np.linspace(0.0, np.log(200.0), 4001))
     for v, c, need in (((1.0, 9.0), (1.0, 1.0), 4.0), ((1.0, 9.0), (8.0, 3.0), 2.5), ((3.0, 0.2), (1.0, 2.0), 8.0),
                        ((1.0, 1.0), (1.0, 100.0), 3.0), ((0.05, 1.0), (1.0, 1.0), 1.5)):

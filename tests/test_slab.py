@@ -100,14 +100,20 @@ def sun_radiance(tau: float, g: float, zenith: float, mu: float, above: bool, se
                                                         vi.sun, 1)).mean()) for b in BETAS}
 
 
-def dome_radiance(tau: float, g: float, mu: float, above: bool, seed: int) -> dict:
-    """L / L_sky of the transport's skylight (orders >= 1) under a uniform sky above the slab, per beta."""
+def dome_radiance(tau: float, g: float, mu: float, above: bool, seeds) -> dict:
+    """L / L_sky of the transport's skylight (orders >= 1) under a uniform sky above the slab, per beta: the mean
+    of runs with ``seeds``. The 8 x 8 pixels see a small patch of the slab, where one run of the higher orders'
+    photons scatters by about 3 % (eight runs at tau 10: 0.97-1.05 of adding-doubling)."""
     vol = slab_volume(tau=tau, n=(48, layers(tau), 48), width=12.0)
     cam = slab_camera(mu, above, res=8)
     scene = Scene(vol, Lighting(sun_vector(0.0), uniform_dome(1.0)), DOME)
-    vi = view_images(scene, cam, 1.0, g, seed=seed)
-    return {b: float(np.tensordot(band_weights(DOME.sky_bands, vi.sky_ratios, b)[0], vi.sky[0], 1).mean())
-            for b in BETAS}
+    out = {b: 0.0 for b in BETAS}
+    for seed in seeds:
+        vi = view_images(scene, cam, 1.0, g, seed=seed)
+        for b in BETAS:
+            out[b] += float(np.tensordot(band_weights(DOME.sky_bands, vi.sky_ratios, b)[0], vi.sky[0], 1).mean()
+                            ) / len(seeds)
+    return out
 
 
 def _close(a: float, b: float) -> bool:
@@ -144,10 +150,9 @@ GAPS = {
     ("normal", 100.0, False): "4-5 % high (beta >= 0.9999); " + BAND_TAIL,
     ("normal", 300.0, True): "2.4-3 % high (beta >= 0.9999), 6 % low at beta 0.99",
     ("normal", 300.0, False): TRUNCATED + "; " + BAND_TAIL,
-    ("oblique", 1.0, True): "2.3-2.9 % high",
-    ("oblique", 10.0, False): "9-10 % high",
+    ("oblique", 10.0, False): "6-8 % high",
     ("oblique", 100.0, True): "34 % low at beta 0.99: " + BAND_TAIL,
-    ("oblique", 100.0, False): "33-40 % high; " + BAND_TAIL,
+    ("oblique", 100.0, False): "19-26 % high (beta >= 0.9999); " + BAND_TAIL,
     ("oblique", 300.0, True): "44 % low at beta 0.99: " + BAND_TAIL,
     ("oblique", 300.0, False): TRUNCATED,
 }
@@ -180,6 +185,6 @@ def test_forward_scattering_slab_flux_normal_sun(tau, above):
 
 @pytest.mark.parametrize("tau, above", _cases("oblique", [(t, a) for t in TAUS for a in (True, False)]))
 def test_forward_scattering_slab_flux_oblique_sun(tau, above):
-    got = dome_radiance(tau, 0.85, 0.5, above, seed=31)
+    got = dome_radiance(tau, 0.85, 0.5, above, seeds=(31, 32, 33, 34))
     refs = {b: adding_doubling_flux(tau, 0.85, b, 0.5)[0 if above else 1] for b in BETAS}
     _check(got, refs, f"g 0.85 tau {tau:g} sun 60 {'R' if above else 'T_diffuse'} flux (reciprocity)")

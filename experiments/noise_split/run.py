@@ -13,6 +13,7 @@ and the node's seconds and photons:
 
     make run    # the main job's volumes (results/volumes/cumulus)
     .venv/bin/python experiments/noise_split/run.py 0.005,0.9 0.02,0.9 --lobes 0.7,0.2 0.9,0.2 0.9,0.5
+    .venv/bin/python experiments/noise_split/run.py 0.005,0.9 --sky-order1-points 0   # the sky photons' order 1
 
 Written to results/experiments/noise_split.json. ``lobe_per_point.patch`` (``git apply`` it) is the sky lobe per
 starting point that docs/stages/precompute.md ("Effort per source") measured and did not keep: the lobe of each
@@ -55,6 +56,8 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("nodes", nargs="+", help="extinction,g (1/m, HG g)")
     ap.add_argument("--lobes", nargs="+", default=["0.7,0.2"], help="sky lobe g,share")
+    ap.add_argument("--sky-order1-points", type=int, default=None,
+                    help="precompute.all_orders.sky_order1_points (default: the config's; 0: the sky photons' order 1)")
     a = ap.parse_args()
     cfg = validate_config(load_yaml_config(ROOT / "config/config.yaml"), ROOT / "workflow/schemas/config.schema.yaml")
     pre, view = cfg["precompute"], cfg["views"]["kite"]
@@ -62,6 +65,8 @@ def main():
     camera = Camera.from_view(view)
     med = make_medium(volume, sun_direction(view["sun"]["azimuth"], view["sun"]["elevation"]))
     st0 = replace(settings_from_config(pre), noise_target=(0.0, 0.0))
+    if a.sky_order1_points is not None:
+        st0 = replace(st0, sky_order1_points=a.sky_order1_points)
     dome = skylight_dome(med.sun_dir, skylight(pre["skylight"], "precompute.skylight"))
     s_dir = np.asarray(med.sun_dir)
     sky_w = sky_luminance_weights(s_dir, dome)

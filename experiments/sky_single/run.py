@@ -51,7 +51,7 @@ def main():
     volume = load_volume(ROOT / "results/volumes/cumulus")
     camera = Camera.from_view(view)
     s_dir = sun_direction(view["sun"]["azimuth"], view["sun"]["elevation"])
-    st = replace(settings_from_config(pre), noise_target=(0.0, 0.0))
+    st = replace(settings_from_config(pre), noise_target=(0.0, 0.0), sky_order1_points=0)   # the photons' order 1
     dome = skylight_dome(np.asarray(s_dir), skylight(pre["skylight"], "precompute.skylight"))
     scene = Scene(volume, Lighting(np.asarray(s_dir), dome), st)
     s_dir = np.asarray(scene.med.sun_dir)

@@ -95,6 +95,7 @@ class AllOrdersSettings:
     split_max: int                        # most copies of one photon at one collision
     sky_lobe_share: float                 # sky photons drawn from a lobe of directions toward the camera
     sky_lobe_g: float = 0.7               # the lobe's HG asymmetry
+    sky_order1_points: int                # the sky's order 1 by shadow rays: points per fine cell (0: photons)
     camera_lobe: float                    # share of the visible scatterings drawn around the direction to the
                                           # camera (angle biasing; the frames turn it off)
     noise_target: tuple                   # median, p95 of a node's relative standard error (0: fixed budget)
@@ -188,7 +189,10 @@ class Scene:
                     if lighting.dome is not None else None)
         self.factors = (int(settings.fine_voxels), int(settings.coarse_voxels))
         self.voxel_volume = float(np.prod(volume.voxel_size))
+        self.g_grid = None        # the g values one set of sky shadow rays serves (None: each node's own g)
+        self.sigma_grid = None    # the sigma_t values it serves (None: each node's own)
         self._vox_depth = {}
+        self._shadow = {}
 
     def camera_depth_voxels(self, camera) -> np.ndarray:
         """The voxels' optical depth to the camera (:func:`natscene.scatter.inscatter.voxel_camera_depth`),
@@ -198,6 +202,22 @@ class Scene:
         if key not in self._vox_depth:
             self._vox_depth[key] = voxel_camera_depth(self.med, camera.position)
         return self._vox_depth[key]
+
+    def shadow_samples(self, camera, sigma: float, g: float):
+        """The sky's order-1 shadow rays for ``camera`` (:func:`natscene.scatter.sky_first.shadow_samples`) over
+        ``g_grid`` (or ``g`` alone), in the cells that the smallest of ``sigma_grid`` (or ``sigma``) lets the
+        camera see; made once per camera position and grids."""
+        from natscene.scatter.sky_first import shadow_samples
+        gs = tuple(float(x) for x in (self.g_grid if self.g_grid is not None else (g,)))
+        sig = min(float(x) for x in (self.sigma_grid if self.sigma_grid is not None else (sigma,)) if x > 0)
+        key = (tuple(float(x) for x in camera.position), gs, sig)
+        if key not in self._shadow:
+            self._shadow = {key: shadow_samples(self.med, self.camera_depth_voxels(camera), camera.position,
+                                                self.sky.dome, gs, self.factors[0],
+                                                per_cell=self.settings.sky_order1_points, seed=7919,
+                                                p_ground=self.settings.p_ground,
+                                                max_camera_depth=18.5 / (sig * self.volume.extinction_scale))}
+        return self._shadow[key]
 
     def weighted_integrals(self, voxel_integrals: np.ndarray, sigma: float, factor: int) -> np.ndarray:
         """Q(cell) = ∫_cell w sigma_t dV for cells of ``factor`` voxels, from the voxels' ∫rho w dV / voxel
@@ -226,13 +246,17 @@ def _caches(scene: Scene, bands) -> tuple:
     return tuple(out)
 
 
-def _images(scene: Scene, camera, sigma: float, halves, bands, channels: int, voxel_integrals) -> np.ndarray:
-    """(2 halves, channels, bands, H, W) images of the two halves' tallies."""
+def _images(scene: Scene, camera, sigma: float, halves, bands, channels: int, voxel_integrals,
+            k_min: int = 1) -> np.ndarray:
+    """(2 halves, channels, bands, H, W) images of the two halves' tallies; a cache whose bands all end below
+    order ``k_min`` holds no tallies and is not gathered (zeros)."""
     from natscene.scatter.inscatter import cache_fields, gather
     st = scene.settings
     sig_k = sigma * scene.volume.extinction_scale
     out = np.zeros((2, channels, len(bands), camera.height, camera.width), np.float32)
     for ci, (f, sel) in enumerate(_caches(scene, bands)):
+        if all(bands[i][1] is not None and bands[i][1] < k_min for i in sel):
+            continue
         width = st.guide_width[0 if f == scene.factors[0] and ci == 0 else 1]
         guide = None
         if width > 0:   # the cells' optical depth toward the camera: the mean of their voxels'
@@ -244,6 +268,21 @@ def _images(scene: Scene, camera, sigma: float, halves, bands, channels: int, vo
         E = gather(scene.med, camera, sigma, stack, fields[0][1], f, st.step_voxels, st.supersample, scene.bounds)
         out[:, :, sel] = E.reshape(2, channels, len(sel), camera.height, camera.width)
     return out
+
+
+def _sky_order1_images(scene: Scene, camera, sigma: float, g: float, voxel_integrals) -> np.ndarray:
+    """(2 halves, 4 channels, H, W): the sky's order-1 band by shadow rays (:mod:`natscene.scatter.sky_first`),
+    in the fine cache's cells and gathered as the photons' bands."""
+    from natscene.scatter.inscatter import cache_fields, gather
+    from natscene.scatter.sky_first import first_order_numerators
+    f = scene.factors[0]
+    q = scene.weighted_integrals(voxel_integrals, sigma, f)
+    num = first_order_numerators(scene.shadow_samples(camera, sigma, g), sigma * scene.volume.extinction_scale, g, q)
+    fields = [cache_fields(num[h], q) for h in range(2)]
+    stack = np.concatenate([c for c, _ in fields])                      # (2 * 4, cz, cy, cx)
+    E = gather(scene.med, camera, sigma, stack, fields[0][1], f, scene.settings.step_voxels,
+               scene.settings.supersample, scene.bounds)
+    return E.reshape(2, 4, camera.height, camera.width)
 
 
 def weight_window(scene: Scene, source, sigma: float, g: float, camera, seed: int, pilot: int = 65536):
@@ -348,7 +387,7 @@ def _part(scene: Scene, source, sigma: float, g: float, camera, n_photons: int, 
           depth, window, channels: int, vint) -> _Part:
     """``n_photons`` of ``source`` traced as two halves and gathered into band images."""
     halves = _trace_halves(scene, source, sigma, g, camera, n_photons, bands, k_min, seed, depth, window)
-    return _Part(_images(scene, camera, sigma, halves, bands, channels, vint), sum(h.histogram for h in halves),
+    return _Part(_images(scene, camera, sigma, halves, bands, channels, vint, k_min), sum(h.histogram for h in halves),
                  int(sum(h.photons for h in halves)), int(sum(h.collisions for h in halves)),
                  float(max(h.truncated for h in halves)))
 
@@ -363,16 +402,21 @@ def budget_scale(noise: tuple, target: tuple) -> float:
     return need
 
 
-def source_scales(variances, costs, need: float) -> list:
+def source_scales(variances, costs, need: float, fixed: float = 0.0) -> list:
     """Factors (each >= 1) by which to multiply each source's photons so that the summed variance of a node's
-    pixel, ``sum(variances)``, falls by ``need`` at the least cost (Neyman allocation; ``costs``: each source's
-    cost so far, its variance falling as 1 / its photons). Minimising sum c_i x_i under sum v_i / x_i = V*
-    gives x_i = sqrt(v_i / c_i) sum_j sqrt(v_j c_j) / V*; a source whose x_i would fall below 1 (its photons
-    are traced already) keeps them, and the others share what remains. Equal shares give ``need`` for every
-    source; a source without variance gets no more photons."""
+    pixel, ``sum(variances) + fixed``, falls by ``need`` at the least cost (Neyman allocation; ``costs``: each
+    source's cost so far, its variance falling as 1 / its photons; ``fixed``: variance that no source's photons
+    lower, the sky's order 1 by shadow rays). Minimising sum c_i x_i under sum v_i / x_i = V* - fixed gives
+    x_i = sqrt(v_i / c_i) sum_j sqrt(v_j c_j) / (V* - fixed); a source whose x_i would fall below 1 (its photons
+    are traced already) keeps them, and the others share what remains. Where ``fixed`` alone exceeds V*, the
+    sources' own variance falls by ``need``. Equal shares give ``need`` for every source; a source without
+    variance gets no more photons."""
     v = [max(float(x), 0.0) for x in variances]
     c = [max(float(x), 1e-30) for x in costs]
-    target = sum(v) / float(need)
+    fixed = max(float(fixed), 0.0)
+    target = (sum(v) + fixed) / float(need) - fixed
+    if target <= 0:                                    # the fixed variance alone is over the wanted one
+        target = sum(v) / float(need)
     if sum(v) <= 0 or need <= 1.0:
         return [1.0] * len(v)
     free = list(range(len(v)))
@@ -418,13 +462,16 @@ def view_images(scene: Scene, camera, sigma: float, g: float, seed: int = 0, noi
     n_sun = photons_for(scene, scene.sun, sigma, g, camera, st.sun_collisions, 10 ** 9, seed,
                         most=st.sun_photons_max, window=win, pilot=16384 if win else 32768)
     jobs = [(scene.sun, n_sun, st.sun_bands, 2, seed, win, 1)]
+    order1 = None
     if scene.sky is not None:
         sky = (scene.sky.toward(camera.position, st.sky_lobe_g, st.sky_lobe_share)
                if st.sky_lobe_share > 0 else scene.sky)
         win = weight_window(scene, sky, sigma, g, camera, seed + 7919) if st.importance else None
         n_sky = photons_for(scene, sky, sigma, g, camera, st.sky_collisions, 10 ** 9, seed + 7919,
                             most=st.sky_photons_max, window=win, pilot=16384 if win else 32768)
-        jobs.append((sky, n_sky, st.sky_bands, 1, seed + 7919, win, 4))
+        shadow = st.sky_order1_points > 0
+        jobs.append((sky, n_sky, st.sky_bands, 2 if shadow else 1, seed + 7919, win, 4))
+        order1 = _sky_order1_images(scene, camera, sigma, g, vint) if shadow else None
 
     def run(scales, round_: int) -> list:
         return [None if sc <= 0 else
@@ -434,10 +481,15 @@ def view_images(scene: Scene, camera, sigma: float, g: float, seed: int = 0, noi
 
     def result(parts) -> ViewImages:
         sun, sky = parts[0], (parts[1] if len(parts) > 1 else None)
+        sky_halves = None if sky is None else sky.halves
+        if sky is not None and order1 is not None:      # band (1) by shadow rays, the photons' from order 2 on
+            sky_halves = sky.halves.copy()
+            sky_halves[:, :, 0] = order1
         stats = dict(sun_photons=sun.photons, sun_collisions=sun.collisions, sun_truncated=sun.truncated)
         if sky is not None:
-            stats.update(sky_photons=sky.photons, sky_collisions=sky.collisions)
-        return ViewImages(sun.halves[:, 0], None if sky is None else sky.halves,
+            stats.update(sky_photons=sky.photons, sky_collisions=sky.collisions,
+                         sky_order1="shadow_rays" if order1 is not None else "photons")
+        return ViewImages(sun.halves[:, 0], sky_halves,
                           fit_ratios(st.sun_bands, sun.histogram),
                           None if sky is None else fit_ratios(st.sky_bands, sky.histogram), stats)
 
@@ -451,8 +503,11 @@ def view_images(scene: Scene, camera, sigma: float, g: float, seed: int = 0, noi
             if need <= 1.0:
                 break
             need *= 1.1
-            x = (source_scales(split(vi), [p.collisions for p in parts], need)
-                 if split is not None and len(parts) > 1 else [need] * len(parts))
+            if split is not None and len(parts) > 1:   # a share past the sources' (the sky's order 1 by shadow
+                v = split(vi)                          # rays) is fixed: no photons lower it
+                x = source_scales(v[:len(parts)], [p.collisions for p in parts], need, fixed=sum(v[len(parts):]))
+            else:
+                x = [need] * len(parts)
             want = [min(sc * xi, float(st.max_budget_scale)) for sc, xi in zip(scales, x)]
             extra = [w - sc if w > sc * 1.05 else 0.0 for w, sc in zip(want, scales)]
             if not any(extra):

@@ -148,20 +148,33 @@ def node_noise(vi, sun_bands, sky_bands, sky_w, foot, single_sun) -> dict:
     return out
 
 
-def source_variances(vi, sun_bands, sky_bands, sky_w, foot, single_sun) -> tuple[float, float]:
+def source_variances(vi, sun_bands, sky_bands, sky_w, foot, single_sun) -> tuple:
     """The sun's and the sky's shares of one node's pixel variance: the mean over its cloud pixels of each
     source's squared two-halves standard error (:func:`natscene.scatter.allorders.standard_error`) relative to
     the composed pixel (as ``pixel`` of :func:`node_noise`), averaged over :data:`NOISE_BETAS`; what
-    :func:`natscene.scatter.allorders.source_scales` divides a top-up by."""
+    :func:`natscene.scatter.allorders.source_scales` divides a top-up by. Where the sky's order 1 comes from
+    shadow rays (``vi.stats["sky_order1"]``), a third share: its variance, which more sky photons do not lower."""
+    from dataclasses import replace
+
     from natscene.scatter.allorders import standard_error
-    v = np.zeros(2)
+    shadow = vi.stats.get("sky_order1") == "shadow_rays"
+    photons = vi
+    if shadow:                                        # the sky photons' bands alone (order 2 on)
+        halves = vi.sky_halves.copy()
+        halves[:, :, 0] = 0.0
+        photons = replace(vi, sky_halves=halves)
+    v = np.zeros(3)
     for b in NOISE_BETAS:
-        h = composed_halves(vi, sun_bands, sky_bands, sky_w, b)
-        sky = [h["sun_and_sky"][i] - h["sun"][i] for i in range(2)]
-        pixel, ok = _pixel(*h["sun_and_sky"], b, single_sun, foot)
-        for n, (x, y) in enumerate((h["sun"], sky)):
+        h = composed_halves(photons, sun_bands, sky_bands, sky_w, b)
+        full = composed_halves(vi, sun_bands, sky_bands, sky_w, b)["sun_and_sky"] if shadow else h["sun_and_sky"]
+        parts = [h["sun"], [h["sun_and_sky"][i] - h["sun"][i] for i in range(2)]]
+        if shadow:
+            parts.append([full[i] - h["sun_and_sky"][i] for i in range(2)])
+        pixel, ok = _pixel(*full, b, single_sun, foot)
+        for n, (x, y) in enumerate(parts):
             v[n] += float(np.mean((standard_error(x, y)[ok] / pixel[ok]) ** 2)) if ok.any() else 0.0
-    return float(v[0] / len(NOISE_BETAS)), float(v[1] / len(NOISE_BETAS))
+    v /= len(NOISE_BETAS)
+    return tuple(float(x) for x in (v if shadow else v[:2]))
 
 
 def _multiple(volume, camera, sun_dir, sigmas, gs, settings, sky, seed, log, single):
@@ -174,6 +187,8 @@ def _multiple(volume, camera, sun_dir, sigmas, gs, settings, sky, seed, log, sin
     sky = skylight(sky, "precompute.skylight")
     dome = skylight_dome(sun_dir, sky)
     scene = Scene(volume, Lighting(np.asarray(sun_dir, np.float64), dome), settings)
+    scene.g_grid = tuple(float(g) for g in gs)         # one set of the sky's shadow rays serves every node
+    scene.sigma_grid = tuple(float(s) for s in sigmas if s > 0)
     H, W = camera.height, camera.width
     Ng, Ns = len(gs), len(sigmas)
     sb, kb = settings.sun_bands, settings.sky_bands
