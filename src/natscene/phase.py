@@ -6,7 +6,7 @@ Defines the Henyey–Greenstein phase function, normalised over the sphere (Doba
 
 -   :func:`hg`: the phase function on numpy arrays; :data:`INV_4PI`: the isotropic value 1/(4π).
 -   :func:`hg_dr`: the phase function on Dr.Jit arrays.
--   :func:`hg_sample_cos_dr`: cos θ sampled from HG(g) (Dr.Jit).
+-   :func:`hg_sample_cos`, :func:`hg_sample_cos_dr`: cos θ sampled from HG(g) (numpy, Dr.Jit).
 
 p(cos θ, g) = (1 - g²) / (4π (1 + g² - 2 g cos θ)^{3/2}), θ the angle between the propagation directions
 before and after scattering (g > 0: forward scattering). Works on numpy arrays and Dr.Jit arrays; the
@@ -29,7 +29,7 @@ import math
 
 import numpy as np
 
-__all__ = ["hg", "hg_dr", "hg_sample_cos_dr", "INV_4PI"]
+__all__ = ["hg", "hg_dr", "hg_sample_cos", "hg_sample_cos_dr", "INV_4PI"]
 
 INV_4PI = 1.0 / (4.0 * math.pi)
 
@@ -46,6 +46,17 @@ def hg_dr(cos_theta, g):
     import drjit as dr
     denom = 1.0 + g * g - 2.0 * g * cos_theta
     return (1.0 - g * g) * INV_4PI * dr.rsqrt(denom * denom * denom)
+
+
+def hg_sample_cos(u, g):
+    """cos θ distributed as HG(g) from uniforms u in [0, 1) (numpy: broadcasts over u and g), as
+    :func:`hg_sample_cos_dr`."""
+    u = np.asarray(u, np.float64)
+    g = np.asarray(g, np.float64)
+    g_safe = np.where(np.abs(g) < 1e-3, 1e-3, g)
+    sq = (1.0 - g_safe * g_safe) / (1.0 - g_safe + 2.0 * g_safe * u)
+    cos_hg = (1.0 + g_safe * g_safe - sq * sq) / (2.0 * g_safe)
+    return np.clip(np.where(np.abs(g) < 1e-3, 1.0 - 2.0 * u, cos_hg), -1.0, 1.0)
 
 
 def hg_sample_cos_dr(u, g):

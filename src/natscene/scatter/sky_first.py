@@ -51,7 +51,7 @@ import drjit as dr
 import mitsuba as mi
 
 from natscene.scatter.medium import ray_box_dr
-from natscene.scatter.phase import hg
+from natscene.scatter.phase import hg, hg_sample_cos
 
 __all__ = ["ShadowSamples", "shadow_samples", "first_order_numerators", "DOME_SHARE"]
 
@@ -82,18 +82,23 @@ def _occupied_cells(density: np.ndarray, factor: int) -> np.ndarray:
     return block_sum(live, factor) > 0
 
 
-def _dome_radiance(dome, src: np.ndarray) -> np.ndarray:
-    """(4, N) radiance arriving from the unit directions ``src`` (toward the source): the dome's table above the
-    horizon (cells uniform in cos(zenith) and azimuth, as :class:`natscene.scatter.photons.SkySource`), the
-    unit ground below."""
-    rgb = np.asarray(dome.rgb, np.float64)
-    n_t, n_p = rgb.shape[:2]
-    up = src[:, 1] > 0
+def _dome_cell(dome, src: np.ndarray) -> tuple:
+    """(above the horizon, flat index of the dome's cell) of the unit directions ``src`` (toward the source): cells
+    uniform in cos(zenith) and azimuth, as :class:`natscene.scatter.photons.SkySource`."""
+    n_t, n_p = np.asarray(dome.rgb).shape[:2]
     it = np.clip(np.floor((1.0 - src[:, 1]) * n_t), 0, n_t - 1).astype(np.int64)
     phi = np.mod(np.arctan2(src[:, 0], src[:, 2]), 2.0 * np.pi)
     ip = np.clip(np.floor(phi / (2.0 * np.pi) * n_p), 0, n_p - 1).astype(np.int64)
+    return src[:, 1] > 0, it * n_p + ip
+
+
+def _dome_radiance(dome, src: np.ndarray) -> np.ndarray:
+    """(4, N) radiance arriving from the unit directions ``src`` (toward the source): the dome's table above the
+    horizon, the unit ground below."""
+    up, cell = _dome_cell(dome, src)
+    rgb = np.asarray(dome.rgb, np.float64).reshape(-1, 3)
     out = np.zeros((4, src.shape[0]), np.float32)
-    out[:3] = np.where(up, rgb[it, ip].T, 0.0)
+    out[:3] = np.where(up, rgb[cell].T, 0.0)
     out[3] = np.where(up, 0.0, 1.0)
     return out
 
@@ -126,20 +131,14 @@ def _dome_pdf(dome, table, src: np.ndarray) -> np.ndarray:
     """The pdf (per steradian) of :func:`_dome_directions` at the unit directions ``src``."""
     n_t, n_p = np.asarray(dome.rgb).shape[:2]
     p_ground, p_cell, _ = table
-    it = np.clip(np.floor((1.0 - src[:, 1]) * n_t), 0, n_t - 1).astype(np.int64)
-    phi = np.mod(np.arctan2(src[:, 0], src[:, 2]), 2.0 * np.pi)
-    ip = np.clip(np.floor(phi / (2.0 * np.pi) * n_p), 0, n_p - 1).astype(np.int64)
+    up, cell = _dome_cell(dome, src)
     omega_cell = 2.0 * np.pi / (n_t * n_p)
-    return np.where(src[:, 1] > 0, (1.0 - p_ground) * p_cell[it * n_p + ip] / omega_cell, p_ground / (2.0 * np.pi))
+    return np.where(up, (1.0 - p_ground) * p_cell[cell] / omega_cell, p_ground / (2.0 * np.pi))
 
 
 def _hg_directions(axis: np.ndarray, g: np.ndarray, rng) -> np.ndarray:
     """Unit directions drawn from HG(g) (per row) around the unit ``axis`` rows."""
-    u = rng.random(axis.shape[0])
-    g_safe = np.where(np.abs(g) < 1e-3, 1e-3, g)
-    sq = (1.0 - g_safe ** 2) / (1.0 - g_safe + 2.0 * g_safe * u)
-    cos_t = np.where(np.abs(g) < 1e-3, 1.0 - 2.0 * u, (1.0 + g_safe ** 2 - sq ** 2) / (2.0 * g_safe))
-    cos_t = np.clip(cos_t, -1.0, 1.0)
+    cos_t = hg_sample_cos(rng.random(axis.shape[0]), g)
     sin_t = np.sqrt(np.maximum(1.0 - cos_t ** 2, 0.0))
     phi = 2.0 * np.pi * rng.random(axis.shape[0])
     helper = np.where(np.abs(axis[:, :1]) < 0.9, np.array([[1.0, 0.0, 0.0]]), np.array([[0.0, 1.0, 0.0]]))
