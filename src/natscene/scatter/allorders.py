@@ -21,7 +21,9 @@ For one view (camera + sun), one sigma_t and one g this module computes, with ph
 - ``sun`` (B_sun, H, W): the light of each band of orders >= 2 of the sun's multiple scattering, per unit
   sun irradiance and without the albedo (order 1 is the ray-marched S_sun of Eq. 5);
 - ``sky`` (4, B_sky, H, W): the light of each band of orders >= 1 of the skylight, without the albedo, for
-  the dome's R, G, B radiance distributions and a unit-radiance ground (lower hemisphere);
+  the dome's R, G, B radiance distributions and a unit-radiance ground (lower hemisphere); order 1 by shadow rays
+  at the fine cache's cells (:mod:`natscene.scatter.sky_first`, ``sky_order1_points`` > 0: one set of points per
+  view serves every node, :meth:`Scene.shadow_samples`) or from the sky photons' first flights;
 - the bands' geometric ratios (:func:`natscene.scatter.bands.fit_ratios`), so that any albedo composes in
   closed form (:func:`natscene.scatter.bands.band_weights`);
 - a noise estimate: the photons are traced as two independent halves, and the images of the halves give
