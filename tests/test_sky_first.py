@@ -13,6 +13,7 @@ import natscene  # noqa: F401
 from natscene.phase import hg
 from natscene.scatter.inscatter import voxel_camera_depth
 from natscene.scatter.medium import make_medium
+from natscene.scatter.photons import SkySource
 from natscene.scatter.skylight import uniform_dome
 from natscene.scatter.sky_first import first_order_numerators, shadow_samples
 from natscene.volume.grid import Volume
@@ -75,7 +76,8 @@ def test_first_order_in_a_constant_box_matches_quadrature(mu_t, g):
     med = make_medium(vol)
     cam = np.array([0.5, 0.6, -3.0])
     depth = voxel_camera_depth(med, cam)
-    s = shadow_samples(med, depth, cam, uniform_dome(L), [g], 1, per_cell=1024, seed=3)
+    s = shadow_samples(med, depth, cam, SkySource(uniform_dome(L), np.zeros(3), np.ones(3)), [g], 1, per_cell=1024,
+                       seed=3)
     q = np.ones((N, N, N))                                    # S_1 itself: C / Q with Q = 1
     est = first_order_numerators(s, mu_t, g, q).mean(0)[0]    # the two halves, channel R (the dome's)
     ground = first_order_numerators(s, mu_t, g, q).mean(0)[3]
@@ -97,7 +99,8 @@ def test_halves_are_independent_and_every_point_is_counted():
     vol = _box(1e-6)
     med = make_medium(vol)
     cam = np.array([0.5, 0.5, -3.0])
-    s = shadow_samples(med, voxel_camera_depth(med, cam), cam, uniform_dome(L), [0.0, 0.9], 1, per_cell=32, seed=1)
+    s = shadow_samples(med, voxel_camera_depth(med, cam), cam, SkySource(uniform_dome(L), np.zeros(3), np.ones(3)),
+                       [0.0, 0.9], 1, per_cell=32, seed=1)
     assert s.rho.size == N ** 3 * 32
     assert np.all(np.bincount(s.index, minlength=2 * N ** 3) == 16)
     c = first_order_numerators(s, 0.0, 0.9, np.ones((N, N, N)))

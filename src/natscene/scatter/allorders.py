@@ -213,17 +213,17 @@ class Scene:
         """The sky's order-1 shadow rays for ``camera`` (:func:`natscene.scatter.sky_first.shadow_samples`) over
         ``g_grid`` (or ``g`` alone), in the cells that the smallest of ``sigma_grid`` (or ``sigma``) lets the
         camera see; made once per camera position and grids."""
+        from natscene.scatter.inscatter import VISIBLE_DEPTH
         from natscene.scatter.sky_first import shadow_samples
         gs = tuple(float(x) for x in (self.g_grid if self.g_grid is not None else (g,)))
         sig = min(float(x) for x in (self.sigma_grid if self.sigma_grid is not None else (sigma,)) if x > 0)
         key = (tuple(float(x) for x in camera.position), gs, sig, int(self.shadow_seed))
         if key not in self._shadow:
             self._shadow = {key: shadow_samples(self.med, self.camera_depth_voxels(camera), camera.position,
-                                                self.sky.dome, gs, self.factors[0],
+                                                self.sky, gs, self.factors[0],
                                                 per_cell=self.settings.sky_order1_points,
                                                 seed=7919 + int(self.shadow_seed),
-                                                p_ground=self.settings.p_ground,
-                                                max_camera_depth=18.5 / (sig * self.volume.extinction_scale))}
+                                                max_camera_depth=VISIBLE_DEPTH / (sig * self.volume.extinction_scale))}
         return self._shadow[key]
 
     def weighted_integrals(self, voxel_integrals: np.ndarray, sigma: float, factor: int) -> np.ndarray:
@@ -270,26 +270,31 @@ def _images(scene: Scene, camera, sigma: float, halves, bands, channels: int, vo
             from natscene.scatter.inscatter import block_sum
             guide = block_sum(scene.camera_depth_voxels(camera), f) / f ** 3 * sig_k
         q = scene.weighted_integrals(voxel_integrals, sigma, f)
-        fields = [cache_fields(h.numerators[ci], q, guide=guide, guide_width=width) for h in halves]
-        stack = np.concatenate([c.reshape(-1, *c.shape[2:]) for c, _ in fields])   # (2 * ch * nsel, cz, cy, cx)
-        E = gather(scene.med, camera, sigma, stack, fields[0][1], f, st.step_voxels, st.supersample, scene.bounds)
+        E = _gather_halves(scene, camera, sigma, [h.numerators[ci] for h in halves], q, f, guide, width)
         out[:, :, sel] = E.reshape(2, channels, len(sel), camera.height, camera.width)
     return out
+
+
+def _gather_halves(scene: Scene, camera, sigma: float, numerators, q, factor: int, guide=None,
+                   width: float = 0.0) -> np.ndarray:
+    """The view integrals (2 x fields, H, W) of both halves' cache ``numerators`` (each (..., cz, cy, cx)) over the
+    cells' ``q`` (:func:`natscene.scatter.inscatter.cache_fields`, :func:`natscene.scatter.inscatter.gather`)."""
+    from natscene.scatter.inscatter import cache_fields, gather
+    st = scene.settings
+    fields = [cache_fields(n, q, guide=guide, guide_width=width) for n in numerators]
+    stack = np.concatenate([c.reshape(-1, *c.shape[-3:]) for c, _ in fields])       # (2 * fields, cz, cy, cx)
+    return gather(scene.med, camera, sigma, stack, fields[0][1], factor, st.step_voxels, st.supersample,
+                  scene.bounds)
 
 
 def _sky_order1_images(scene: Scene, camera, sigma: float, g: float, voxel_integrals) -> np.ndarray:
     """(2 halves, 4 channels, H, W): the sky's order-1 band by shadow rays (:mod:`natscene.scatter.sky_first`),
     in the fine cache's cells and gathered as the photons' bands."""
-    from natscene.scatter.inscatter import cache_fields, gather
     from natscene.scatter.sky_first import first_order_numerators
     f = scene.factors[0]
     q = scene.weighted_integrals(voxel_integrals, sigma, f)
     num = first_order_numerators(scene.shadow_samples(camera, sigma, g), sigma * scene.volume.extinction_scale, g, q)
-    fields = [cache_fields(num[h], q) for h in range(2)]
-    stack = np.concatenate([c for c, _ in fields])                      # (2 * 4, cz, cy, cx)
-    E = gather(scene.med, camera, sigma, stack, fields[0][1], f, scene.settings.step_voxels,
-               scene.settings.supersample, scene.bounds)
-    return E.reshape(2, 4, camera.height, camera.width)
+    return _gather_halves(scene, camera, sigma, list(num), q, f).reshape(2, 4, camera.height, camera.width)
 
 
 def weight_window(scene: Scene, source, sigma: float, g: float, camera, seed: int, pilot: int = 65536):

@@ -55,7 +55,11 @@ from natscene.scatter.rays import camera_rays, pixel_mean
 from natscene.scatter.single import one_minus_exp
 
 __all__ = ["voxel_camera_depth", "depth_texture", "visibility", "weighted_voxel_integrals", "block_sum",
-           "cache_fields", "gather"]
+           "cache_fields", "gather", "VISIBLE_DEPTH"]
+
+#: the camera optical depth past which the visibility weight w = exp(-depth) is below 1e-8: what lies deeper adds
+#: nothing the camera sees
+VISIBLE_DEPTH = 18.5
 
 
 def voxel_camera_depth(med, camera_position, step_voxels: float = 1.0) -> np.ndarray:
@@ -115,7 +119,7 @@ def weighted_voxel_integrals(med, depth_vox: np.ndarray, sig_k: float, chunk: in
     nz, ny, nx = d.shape
     out = np.zeros(d.shape, np.float64)
     reach = sig_k * (np.asarray(depth_vox, np.float64) - maximum_filter(d, size=3) * 2.0 * med.voxel)
-    live = binary_dilation(d > 0, iterations=1) & (reach < 18.5)
+    live = binary_dilation(d > 0, iterations=1) & (reach < VISIBLE_DEPTH)
     iz, iy, ix = np.nonzero(live)
     if iz.size == 0:
         return out

@@ -103,19 +103,9 @@ def _dome_radiance(dome, src: np.ndarray) -> np.ndarray:
     return out
 
 
-def _dome_table(dome, p_ground: float):
-    """(share of the ground, cells' probabilities, their CDF) of the dome's own sampling by luminance, as
-    :class:`natscene.scatter.photons.SkySource` draws it (all from the ground where the dome is dark)."""
-    lum = np.maximum(np.asarray(dome.rgb, np.float64) @ np.array([0.2126, 0.7152, 0.0722]), 0.0).ravel()
-    has_sky = lum.sum() > 0
-    p_cell = lum / lum.sum() if has_sky else np.full(lum.size, 1.0 / lum.size)
-    cdf = np.cumsum(p_cell)
-    cdf[-1] = 1.0
-    return (float(p_ground) if has_sky else 1.0), p_cell, cdf
-
-
 def _dome_directions(dome, table, n: int, rng) -> np.ndarray:
-    """``n`` unit directions toward the source drawn by the dome's luminance (``table``: :func:`_dome_table`)."""
+    """``n`` unit directions toward the source drawn by the dome's luminance (``table``: the share of the ground,
+    the cells' probabilities and their CDF of :class:`natscene.scatter.photons.SkySource`)."""
     n_t, n_p = np.asarray(dome.rgb).shape[:2]
     p_ground, _, cdf = table
     ground = rng.random(n) < p_ground
@@ -148,13 +138,14 @@ def _hg_directions(axis: np.ndarray, g: np.ndarray, rng) -> np.ndarray:
     return (sin_t * np.cos(phi))[:, None] * t + (sin_t * np.sin(phi))[:, None] * b + cos_t[:, None] * axis
 
 
-def shadow_samples(med, depth_vox: np.ndarray, camera_position, dome, gs, factor: int, per_cell: int = 128,
-                   seed: int = 0, step_voxels: float = 1.0, max_camera_depth: float = np.inf, p_ground: float = 0.25,
+def shadow_samples(med, depth_vox: np.ndarray, camera_position, sky, gs, factor: int, per_cell: int = 128,
+                   seed: int = 0, step_voxels: float = 1.0, max_camera_depth: float = np.inf,
                    chunk: int = 1 << 20) -> ShadowSamples:
     """``per_cell`` points (a multiple of 16: 2 x 2 x 2 strata, each with a point of either half) in every occupied
     cell of ``factor`` voxels, each with a direction of travel ω from the mixture q of the equal mixture of HG(g)
-    lobes around the direction to the camera over ``gs`` and, a share :data:`DOME_SHARE`, the dome's luminance
-    (``p_ground`` of them from the ground, as the sky photons), the optical depth back toward the source marched with ``step_voxels``
+    lobes around the direction to the camera over ``gs`` and, a share :data:`DOME_SHARE`, the dome's luminance as
+    the sky photons draw it (``sky``: the :class:`natscene.scatter.photons.SkySource`, its ground share too), the
+    optical depth back toward the source marched with ``step_voxels``
     steps (midpoint rule on the trilinear density, to the box), and the camera depth ``depth_vox``
     (:func:`natscene.scatter.inscatter.voxel_camera_depth`) interpolated as the tallies' weight. Cells none of
     whose voxels lies within ``max_camera_depth`` (∫ rho, world units) of the camera get no points: the smallest
@@ -173,7 +164,7 @@ def shadow_samples(med, depth_vox: np.ndarray, camera_position, dome, gs, factor
     cells = np.flatnonzero(occ.ravel())
     rng = np.random.default_rng(seed)
     gs = np.asarray(gs, np.float64)
-    table = _dome_table(dome, p_ground)
+    dome, table = sky.dome, (sky.p_ground, sky.p_cell, sky.cdf)
     vox = (med.bbox_max - med.bbox_min) / np.array([nx, ny, nz])
     cam = np.asarray(camera_position, np.float64)
     tex = depth_texture(depth_vox)
