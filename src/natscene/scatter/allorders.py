@@ -178,9 +178,12 @@ class ViewImages:
 
 class Scene:
     """The volume prepared once for a view: medium with the sun optical depth, majorant grid, emitters, and
-    per camera position the voxels' optical depth to the camera."""
+    per camera position the voxels' optical depth to the camera. ``g_grid``, ``sigma_grid``: the nodes that one
+    set of the sky's shadow rays serves (None: each node's own); ``shadow_seed``: their seed (a frame's render
+    seed: two seeds, two independent runs)."""
 
-    def __init__(self, volume, lighting: Lighting, settings: AllOrdersSettings):
+    def __init__(self, volume, lighting: Lighting, settings: AllOrdersSettings, g_grid=None, sigma_grid=None,
+                 shadow_seed: int = 0):
         from natscene.scatter.majorant import majorant_grid
         from natscene.scatter.medium import make_medium
         from natscene.scatter.photons import SkySource, SunBeam
@@ -194,9 +197,9 @@ class Scene:
                     if lighting.dome is not None else None)
         self.factors = (int(settings.fine_voxels), int(settings.coarse_voxels))
         self.voxel_volume = float(np.prod(volume.voxel_size))
-        self.g_grid = None        # the g values one set of sky shadow rays serves (None: each node's own g)
-        self.sigma_grid = None    # the sigma_t values it serves (None: each node's own)
-        self.shadow_seed = 0      # the shadow rays' seed (a frame's render seed: two seeds, two independent runs)
+        self.g_grid = None if g_grid is None else tuple(float(x) for x in g_grid)
+        self.sigma_grid = None if sigma_grid is None else tuple(float(x) for x in sigma_grid if x > 0)
+        self.shadow_seed = int(shadow_seed)
         self._vox_depth = {}
         self._shadow = {}
 
@@ -215,8 +218,8 @@ class Scene:
         camera see; made once per camera position and grids."""
         from natscene.scatter.inscatter import VISIBLE_DEPTH
         from natscene.scatter.sky_first import shadow_samples
-        gs = tuple(float(x) for x in (self.g_grid if self.g_grid is not None else (g,)))
-        sig = min(float(x) for x in (self.sigma_grid if self.sigma_grid is not None else (sigma,)) if x > 0)
+        gs = self.g_grid if self.g_grid is not None else (float(g),)
+        sig = min(self.sigma_grid if self.sigma_grid is not None else (float(sigma),))
         key = (tuple(float(x) for x in camera.position), gs, sig, int(self.shadow_seed))
         if key not in self._shadow:
             self._shadow = {key: shadow_samples(self.med, self.camera_depth_voxels(camera), camera.position,

@@ -186,10 +186,9 @@ def _multiple(volume, camera, sun_dir, sigmas, gs, settings, sky, seed, log, sin
     from natscene.sky.daylight import preetham_rgb, skylight
     sky = skylight(sky, "precompute.skylight")
     dome = skylight_dome(sun_dir, sky)
-    scene = Scene(volume, Lighting(np.asarray(sun_dir, np.float64), dome), settings)
-    scene.g_grid = tuple(float(g) for g in gs)         # one set of the sky's shadow rays serves every node
-    scene.sigma_grid = tuple(float(s) for s in sigmas if s > 0)
-    scene.shadow_seed = int(seed)
+    # one set of the sky's shadow rays serves every node
+    scene = Scene(volume, Lighting(np.asarray(sun_dir, np.float64), dome), settings, g_grid=gs, sigma_grid=sigmas,
+                  shadow_seed=seed)
     H, W = camera.height, camera.width
     Ng, Ns = len(gs), len(sigmas)
     sb, kb = settings.sun_bands, settings.sky_bands
@@ -514,8 +513,7 @@ class AllOrders(Transport):
             dome = dome if dome is not None else frame_dome(med.sun_dir, sky_settings)
         else:
             dome = None
-        scene = Scene(volume, Lighting(med.sun_dir, dome), st)
-        scene.shadow_seed = int(seed)                  # another seed, an independent run (noise figures)
+        scene = Scene(volume, Lighting(med.sun_dir, dome), st, shadow_seed=seed)   # another seed, another run
         vi = view_images(scene, camera, sigma, g, seed=seed)
         a_s = L_in * beta * hg(cos_t, g) * single["S_sun"][0]
         a_m = L_in * np.tensordot(band_weights(st.sun_bands, vi.sun_ratios, beta)[0], vi.sun, 1)
