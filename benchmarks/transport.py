@@ -111,8 +111,8 @@ def repeated_noise(vol, camera, sun, settings, nodes=((0.2, 0.85), (0.5, 0.85)),
             t0 = time.perf_counter()
             for r in range(reps):
                 vi = view_images(scene, camera, sigma, g, seed=1000 + r)
-                cs = band_weights(st.sun_bands, vi.sun_ratios, beta)[0]
-                ck = band_weights(st.sky_bands, vi.sky_ratios, beta)[0]
+                cs = band_weights(st.sun_bands, vi.sun_orders, beta)[0]
+                ck = band_weights(st.sky_bands, vi.sky_orders, beta)[0]
                 for h in range(2):
                     halves["sun"].append(np.tensordot(cs, vi.sun_halves[h], 1))
                     halves["sky"].append(np.tensordot(ck, vi.sky_halves[h][:3].sum(0), 1))

@@ -21,7 +21,7 @@ SIGMA, G, BETA = 0.5, 0.85, 0.99
 
 def _composed(vi):
     """The two halves of the sun's composed multiple scattering at BETA."""
-    c = band_weights(default_settings(AllOrdersSettings).sun_bands, vi.sun_ratios, BETA)[0]
+    c = band_weights(default_settings(AllOrdersSettings).sun_bands, vi.sun_orders, BETA)[0]
     return [np.tensordot(c, vi.sun_halves[h], 1) for h in range(2)]
 
 

@@ -96,7 +96,7 @@ def sun_radiance(tau: float, g: float, zenith: float, mu: float, above: bool, se
     scene = Scene(vol, Lighting(sun, None), settings)
     vi = view_images(scene, cam, 1.0, g, seed=seed)
     single = hg(cam.ray_directions() @ sun, g) * march_view(scene.med, cam, [1.0])["S_sun"][0]
-    return {b: float(np.pi * (b * single + np.tensordot(band_weights(settings.sun_bands, vi.sun_ratios, b)[0],
+    return {b: float(np.pi * (b * single + np.tensordot(band_weights(settings.sun_bands, vi.sun_orders, b)[0],
                                                         vi.sun, 1)).mean()) for b in BETAS}
 
 
@@ -111,7 +111,7 @@ def dome_radiance(tau: float, g: float, mu: float, above: bool, seeds) -> dict:
     for seed in seeds:
         vi = view_images(scene, cam, 1.0, g, seed=seed)
         for b in BETAS:
-            out[b] += float(np.tensordot(band_weights(DOME.sky_bands, vi.sky_ratios, b)[0], vi.sky[0], 1).mean()
+            out[b] += float(np.tensordot(band_weights(DOME.sky_bands, vi.sky_orders, b)[0], vi.sky[0], 1).mean()
                             ) / len(seeds)
     return out
 
@@ -135,25 +135,26 @@ def _check(got: dict, refs: dict, label: str):
 # What the all-orders transport misses today (issue 39; the measured ratios are in docs/stages/precompute.md,
 # "Thick clouds"): strict xfail, so a change that makes a case pass fails here until its entry goes.
 TRUNCATED = "max_order 4096: the light that needs more collisions to cross the slab is dropped"
-BAND_TAIL = "beta < 1: the bands' geometric order distribution overweights the long walks"
+BAND_MIX = ("beta < 1: one order distribution per band for the whole cloud (what the camera sees of the slab, its "
+            "edges included), where the light transmitted through the slab's middle walks far longer")
+G0_HIGH = "the isotropic slab's reflected light reads 1-2 % high at tau >= 100"
 GAPS = {
     ("radiance", 10.0, 0, False): "2.5-3.4 % low",
-    ("radiance", 100.0, 0, True): "2 % high (beta >= 0.9999)",
-    ("radiance", 100.0, 60, True): "5 % low at beta 0.99",
-    ("radiance", 100.0, 0, False): TRUNCATED + "; " + BAND_TAIL,
-    ("radiance", 100.0, 60, False): TRUNCATED + "; " + BAND_TAIL,
-    ("radiance", 300.0, 60, True): "6 % low at beta 0.99",
+    ("radiance", 100.0, 0, True): "1.5-2.2 % high: " + G0_HIGH,
+    ("radiance", 100.0, 60, True): "3.1 % low at beta 0.99",
+    ("radiance", 100.0, 0, False): TRUNCATED,
+    ("radiance", 100.0, 60, False): TRUNCATED,
+    ("radiance", 300.0, 60, True): "4.1 % low at beta 0.99",
     ("radiance", 300.0, 0, False): TRUNCATED,
     ("radiance", 300.0, 60, False): TRUNCATED,
-    ("normal", 1.0, True): "2.8 % low",
-    ("normal", 100.0, True): "4 % high (beta >= 0.9999), 3 % low at beta 0.99",
-    ("normal", 100.0, False): "4-5 % high (beta >= 0.9999); " + BAND_TAIL,
-    ("normal", 300.0, True): "2.4-3 % high (beta >= 0.9999), 6 % low at beta 0.99",
-    ("normal", 300.0, False): TRUNCATED + "; " + BAND_TAIL,
+    ("normal", 1.0, True): "2.7 % low",
+    ("normal", 100.0, True): "4 % high",
+    ("normal", 100.0, False): "5 % high (beta >= 0.9999); 1.55 times at beta 0.99: " + BAND_MIX,
+    ("normal", 300.0, True): "2.4-3.6 % high",
+    ("normal", 300.0, False): TRUNCATED,
     ("oblique", 10.0, False): "6-8 % high",
-    ("oblique", 100.0, True): "34 % low at beta 0.99: " + BAND_TAIL,
-    ("oblique", 100.0, False): "19-26 % high (beta >= 0.9999); " + BAND_TAIL,
-    ("oblique", 300.0, True): "44 % low at beta 0.99: " + BAND_TAIL,
+    ("oblique", 100.0, True): "3.6 % low at beta 0.99",
+    ("oblique", 100.0, False): "19-26 % high (beta >= 0.9999); " + BAND_MIX,
     ("oblique", 300.0, False): TRUNCATED,
 }
 

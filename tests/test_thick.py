@@ -76,7 +76,7 @@ def test_thick_heap_tables_match_volpath(refs, heap_tables, name):
 
 
 @pytest.mark.parametrize("name", ["blob_t100", pytest.param("blob_t300", marks=pytest.mark.xfail(
-    strict=True, reason="one 8x8 block 11 % low at depth 300 (mean of two runs; the tables' are within 5 %)"))])
+    strict=True, reason="one 8x8 block 13 % low at depth 300 (mean of two runs; the tables' are within 5 %)"))])
 def test_thick_heap_render_matches_volpath(refs, heap_tables, name):
     """The forward renderer: the mean of two runs (one run's 8x8 blocks scatter by up to 8 % at depth 300)."""
     vol, tb = heap_tables
@@ -88,7 +88,7 @@ def test_thick_heap_render_matches_volpath(refs, heap_tables, name):
 @pytest.mark.parametrize("name", HEAP)
 def test_thick_heap_render_by_similarity_matches_volpath(refs, heap_tables, name):
     """The forward renderer with the high orders by similarity (from order 32, walks up to 65536 orders): the mean
-    of two runs within 3 %, every 8x8 block within 10 % (the exact walk's depth-300 block that reads 11 % low is
+    of two runs within 3 %, every 8x8 block within 10 % (the exact walk's depth-300 block that reads 13 % low is
     light that needs more than 4096 collisions)."""
     from dataclasses import replace
     vol, tb = heap_tables
@@ -115,7 +115,7 @@ def test_white_furnace_at_depth_300():
     means = []
     for seed in (4, 5, 6, 7):
         vi = view_images(scene, CAM, sigma, 0.85, seed=seed)
-        c = band_weights(st.sky_bands, vi.sky_ratios, 1.0)[0]
+        c = band_weights(st.sky_bands, vi.sky_orders, 1.0)[0]
         sky = np.tensordot(c, np.moveaxis(vi.sky, 1, 0), 1)
         img = sky[0] + sky[3] * L + T * L
         means.append(img[cloud].mean() / L)

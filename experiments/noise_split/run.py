@@ -44,8 +44,8 @@ BETA = 0.99
 
 def parts(vi, st, sky_w):
     """The halves of each part at BETA: sun orders >= 2, sky order 1, sky orders >= 2 (luminance)."""
-    cs = band_weights(st.sun_bands, vi.sun_ratios, BETA)[0]
-    ck = band_weights(st.sky_bands, vi.sky_ratios, BETA)[0]
+    cs = band_weights(st.sun_bands, vi.sun_orders, BETA)[0]
+    ck = band_weights(st.sky_bands, vi.sky_orders, BETA)[0]
     out = {"sun_multiple": [np.tensordot(cs, vi.sun_halves[h], 1) for h in range(2)]}
     for name, sel in (("sky_order1", slice(0, 1)), ("sky_multiple", slice(1, None))):
         out[name] = [np.tensordot(ck[sel], np.tensordot(sky_w, vi.sky_halves[h], 1)[sel], 1) for h in range(2)]

@@ -45,7 +45,7 @@ def main(args):
             dt = time.perf_counter() - t0
             single = march_view(scene.med, CAM, [s])
             s1 = b * hg(CAM.ray_directions() @ SUN, g) * single["S_sun"][0]
-            c = band_weights(st.sun_bands, vi.sun_ratios, b)[0]
+            c = band_weights(st.sun_bands, vi.sun_orders, b)[0]
             img, ha, hb = (s1 + np.tensordot(c, x, 1) for x in (vi.sun, vi.sun_halves[0], vi.sun_halves[1]))
             ref = refs[f"s{s:g}_g{g:g}_b{b:g}"]
             ref = ref[..., 0] if ref.ndim == 3 else ref

@@ -75,8 +75,8 @@ def main():
             t0 = time.perf_counter()
             vi = view_images(scene, camera, sigma, g, seed=5)
             t_node = time.perf_counter() - t0
-            cs = band_weights(st.sun_bands, vi.sun_ratios, BETA)[0]
-            ck = band_weights(st.sky_bands, vi.sky_ratios, BETA)[0]
+            cs = band_weights(st.sun_bands, vi.sun_orders, BETA)[0]
+            ck = band_weights(st.sky_bands, vi.sky_orders, BETA)[0]
             sun = [np.tensordot(cs, vi.sun_halves[h], 1) for h in range(2)]
             sky_all = [np.tensordot(ck, np.tensordot(sky_w, vi.sky_halves[h], 1), 1) for h in range(2)]
             ph1 = [ck[0] * np.tensordot(sky_w, vi.sky_halves[h][:, 0], 1) for h in range(2)]

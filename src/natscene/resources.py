@@ -163,7 +163,7 @@ def _pixels(res) -> int:
 
 def _table_values(config: dict, pixels: int) -> int:
     """Float values of the precompute tables: 4 single-scattering/geometry images per extinction node, plus per
-    (g, extinction) the n_m - 1 orders (dobashi) or the sun's 8 bands and the sky's 3 bands x 4 channels (all_orders)."""
+    (g, extinction) the n_m - 1 orders (dobashi) or the sun's bands and the sky's bands x 4 channels (all_orders)."""
     pre = config["precompute"]
     n_s = len(pre["extinction"])
     n_g = len(pre["g"])

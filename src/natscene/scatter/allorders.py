@@ -24,7 +24,7 @@ For one view (camera + sun), one sigma_t and one g this module computes, with ph
   the dome's R, G, B radiance distributions and a unit-radiance ground (lower hemisphere); order 1 by shadow rays
   at the fine cache's cells (:mod:`natscene.scatter.sky_first`, ``sky_order1_points`` > 0: one set of points per
   view serves every node, :meth:`Scene.shadow_samples`) or from the sky photons' first flights;
-- the bands' geometric ratios (:func:`natscene.scatter.bands.fit_ratios`), so that any albedo composes in
+- the bands' order distributions (:func:`natscene.scatter.bands.order_distribution`), so that any albedo composes in
   closed form (:func:`natscene.scatter.bands.band_weights`);
 - a noise estimate: the photons are traced as two independent halves, and the images of the halves give
   each pixel's standard error (the cache and the gather are linear in the tallies, so the mean of the two
@@ -59,7 +59,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from natscene.scatter.bands import SKY_BANDS, SUN_BANDS, fit_ratios
+from natscene.scatter.bands import SKY_BANDS, SUN_BANDS, order_distribution
 
 __all__ = ["AllOrdersSettings", "settings_from_config", "render_settings", "frame_settings", "Lighting", "Scene",
            "ViewImages", "view_images", "standard_error", "budget_scale", "source_scales"]
@@ -159,12 +159,12 @@ class Lighting:
 @dataclass
 class ViewImages:
     """Band images of the two independent halves of the photons: ``sun_halves`` (2, B_sun, H, W),
-    ``sky_halves`` (2, 4, B_sky, H, W) or None; the bands' geometric ratios; counts."""
+    ``sky_halves`` (2, 4, B_sky, H, W) or None; the bands' order distributions; counts."""
 
     sun_halves: np.ndarray
     sky_halves: np.ndarray | None
-    sun_ratios: np.ndarray            # (B_sun,)
-    sky_ratios: np.ndarray | None     # (B_sky,)
+    sun_orders: np.ndarray            # (B_sun, J, 2): natscene.scatter.bands.order_distribution
+    sky_orders: np.ndarray | None     # (B_sky, J, 2)
     stats: dict = field(default_factory=dict)
 
     @property
@@ -468,8 +468,8 @@ def view_images(scene: Scene, camera, sigma: float, g: float, seed: int = 0, noi
     nb_sun, nb_sky = len(st.sun_bands), len(st.sky_bands)
     if sigma <= 0:
         sky = np.zeros((2, 4, nb_sky, H, W), np.float32) if scene.sky is not None else None
-        return ViewImages(np.zeros((2, nb_sun, H, W), np.float32), sky, np.ones(nb_sun),
-                          None if sky is None else np.ones(nb_sky), {})
+        return ViewImages(np.zeros((2, nb_sun, H, W), np.float32), sky, order_distribution(st.sun_bands, np.zeros(0)),
+                          None if sky is None else order_distribution(st.sky_bands, np.zeros(0)), {})
     from natscene.scatter.inscatter import weighted_voxel_integrals
     depth = scene.camera_depth_voxels(camera)
     vint = weighted_voxel_integrals(scene.med, depth, sigma * scene.volume.extinction_scale)
@@ -505,8 +505,8 @@ def view_images(scene: Scene, camera, sigma: float, g: float, seed: int = 0, noi
             stats.update(sky_photons=sky.photons, sky_collisions=sky.collisions,
                          sky_order1="shadow_rays" if order1 is not None else "photons")
         return ViewImages(sun.halves[:, 0], sky_halves,
-                          fit_ratios(st.sun_bands, sun.histogram),
-                          None if sky is None else fit_ratios(st.sky_bands, sky.histogram), stats)
+                          order_distribution(st.sun_bands, sun.histogram),
+                          None if sky is None else order_distribution(st.sky_bands, sky.histogram), stats)
 
     parts = run([1.0] * len(jobs), 0)
     vi = result(parts)

@@ -8,7 +8,8 @@ Defines the grouping of scattering orders into bands, with the closed-form albed
 -   :data:`SUN_BANDS`, :data:`SKY_BANDS`: the default bands of the sun's and the sky's light.
 -   :func:`check_bands`: validate contiguous bands with an open last band.
 -   :func:`band_table`: the band index of every order.
--   :func:`fit_ratios`: each band's geometric ratio r_b from the order histogram.
+-   :func:`order_distribution`: each band's distribution of orders (sub-bins: share, mean order) from the order
+    histogram.
 -   :func:`band_weights`: the albedo weights c_b(beta) of the bands.
 
 Dobashi 2012 §7 proposes to "cluster high orders of scattering into several sets (e.g. 2, 3-4, 5-6, and so
@@ -18,11 +19,14 @@ and composes the multiple scattering of any albedo beta as
 
     Σ_{k>=2} beta^k E^(k)(q) = Σ_b c_b(beta) T_b(q),    c_b(beta) = Σ_{k∈B_b} w_b(k) beta^k,
 
-where w_b is the distribution of orders inside the band. It is taken geometric, w_b(k) ∝ r_b^k, with the
-ratio r_b fitted to the order histogram of the whole cloud (the light of each exact order, tallied while
-tracing); the high orders of a thick medium do decay geometrically, so the open last band is a geometric
-tail, c(beta) = beta^a (1 - r) / (1 - r beta). The composition stays a linear combination of per-pixel
-images with weights that are closed-form functions of beta, as Dobashi's Eq. 8.
+where w_b is the distribution of orders inside the band, taken from the order histogram of the whole cloud
+(the light of each exact order toward the camera, tallied while tracing). A band's distribution is kept as
+``ORDER_BINS`` sub-bins of orders, log-spaced over the band, each with its share of the band's light and its mean
+order, and c_b(beta) = Σ_j p_bj beta^(k̄_bj). A geometric distribution w_b(k) ∝ r^k fitted to the histogram
+cannot follow the heavy tail of a thick cloud's orders (the reflected light's orders fall as a power of k; the
+measured difference is in docs/stages/precompute.md, "Thick clouds"). The composition stays a linear combination of
+per-pixel images with weights that are closed-form functions of beta, as Dobashi's Eq. 8; what the sub-bins
+cannot hold is the variation of the order distribution from pixel to pixel inside one band.
 
 References
 ----------
@@ -36,10 +40,11 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["SUN_BANDS", "SKY_BANDS", "check_bands", "band_table", "fit_ratios", "band_weights"]
+__all__ = ["SUN_BANDS", "SKY_BANDS", "check_bands", "band_table", "ORDER_BINS", "order_distribution", "band_weights"]
 
-SUN_BANDS = ((2, 2), (3, 3), (4, 4), (5, 8), (9, 16), (17, 32), (33, 64), (65, None))
+SUN_BANDS = ((2, 2), (3, 3), (4, 4), (5, 8), (9, 16), (17, 32), (33, 64), (65, 256), (257, 1024), (1025, 4096), (4097, None))
 SKY_BANDS = ((1, 1), (2, 8), (9, None))
+ORDER_BINS = 16                    # sub-bins of orders per band
 
 
 def band_table(bands, max_order: int) -> np.ndarray:
@@ -66,48 +71,52 @@ def check_bands(bands, first: int) -> tuple:
     return tuple(out)
 
 
-def fit_ratios(bands, histogram) -> np.ndarray:
-    """Per-band geometric ratio r_b of the order histogram (light per exact order, index = order).
+def _sub_bins(a: int, e: int) -> np.ndarray:
+    """Edges (n + 1,) of at most ``ORDER_BINS`` sub-bins of the orders [a, e], log-spaced, each at least one
+    order wide: sub-bin j holds the orders edges[j] <= k < edges[j + 1]."""
+    if e - a + 1 <= ORDER_BINS:
+        return np.arange(a, e + 2)
+    x = np.round(np.geomspace(a, e + 1, ORDER_BINS + 1)).astype(np.int64)
+    x[0], x[-1] = a, e + 1
+    return np.unique(x)
 
-    Weighted least squares of log H(k) on k over the band's orders with H > 0 (weights H); bands with
-    fewer than two populated orders get r = 1 (flat). The open band's ratio is fitted over its populated
-    orders and kept below 1 (a geometric tail must converge).
-    """
+
+def order_distribution(bands, histogram) -> np.ndarray:
+    """(B, ORDER_BINS, 2): per band, its sub-bins' share of the band's light and mean order, from the order
+    histogram (light per exact order, index = order; the open band ends at the histogram's last order). A band
+    without light puts all of it at its first order; unused sub-bins have share 0."""
     h = np.asarray(histogram, np.float64)
-    r = np.ones(len(bands))
+    out = np.zeros((len(bands), ORDER_BINS, 2))
     for i, (a, e) in enumerate(bands):
-        hi = len(h) - 1 if e is None else min(e, len(h) - 1)
-        k = np.arange(a, hi + 1)
-        v = h[a:hi + 1] if a <= hi else np.zeros(0)
-        ok = v > 0
-        if ok.sum() >= 2:
-            kk, lv, ww = k[ok], np.log(v[ok]), v[ok]
-            km = np.average(kk, weights=ww)
-            slope = np.sum(ww * (kk - km) * (lv - np.average(lv, weights=ww))) / max(np.sum(ww * (kk - km) ** 2), 1e-30)
-            r[i] = float(np.exp(slope))
-        if e is None:
-            r[i] = min(r[i], 0.9995)
-    return r
-
-
-def band_weights(bands, ratios, beta) -> np.ndarray:
-    """c_b(beta) (P, B) for albedos ``beta`` (P,): the band's order distribution w_b(k) ∝ r_b^k weighted by beta^k.
-
-    ``ratios``: (B,), one set for every albedo, or (P, B), one set per albedo (a GA population, each
-    individual at its own table node)."""
-    beta = np.clip(np.atleast_1d(np.asarray(beta, np.float64)), 0.0, 1.0)
-    r_all = np.asarray(ratios, np.float64)
-    if r_all.ndim == 2 and r_all.shape[0] != beta.size:
-        raise ValueError(f"band_weights: {r_all.shape[0]} ratio sets for {beta.size} albedos")
-    r_all = np.broadcast_to(r_all, (beta.size, len(bands)))
-    out = np.zeros((beta.size, len(bands)))
-    for i, (a, e) in enumerate(bands):
-        r = r_all[:, i]
-        if e is None:
-            out[:, i] = beta ** a * (1.0 - r) / (1.0 - r * beta)
-        else:
-            k = np.arange(a, e + 1, dtype=np.float64)
-            w = r[:, None] ** (k - a)[None, :]
-            w /= w.sum(1, keepdims=True)
-            out[:, i] = np.einsum("pk,pk->p", beta[:, None] ** k[None, :], w)
+        hi = len(h) - 1 if e is None else min(int(e), len(h) - 1)
+        out[i, :, 1] = a
+        if hi < a or h[a:hi + 1].sum() <= 0:
+            out[i, 0, 0] = 1.0
+            continue
+        k = np.arange(a, hi + 1, dtype=np.float64)
+        v = h[a:hi + 1]
+        edges = _sub_bins(a, hi)
+        cut = np.searchsorted(k, edges[1:-1])
+        w = np.add.reduceat(v, np.r_[0, cut])
+        kw = np.add.reduceat(v * k, np.r_[0, cut])
+        n = len(w)
+        out[i, :n, 0] = w / w.sum()
+        out[i, :n, 1] = np.where(w > 0, kw / np.maximum(w, 1e-300), k[np.r_[0, cut]])
     return out
+
+
+def band_weights(bands, orders, beta) -> np.ndarray:
+    """c_b(beta) (P, B) for albedos ``beta`` (P,): Σ_j p_bj beta^(k̄_bj) over each band's sub-bins.
+
+    ``orders``: (B, J, 2) from :func:`order_distribution`, one for every albedo, or (P, B, J, 2), one per albedo
+    (a GA population, each individual at its own table node)."""
+    beta = np.clip(np.atleast_1d(np.asarray(beta, np.float64)), 0.0, 1.0)
+    d = np.asarray(orders, np.float64)
+    if d.ndim != 3 and d.ndim != 4 or d.shape[-1] != 2 or d.shape[-3] != len(bands):
+        raise ValueError(f"band_weights: order distributions of shape {d.shape} for {len(bands)} bands")
+    if d.ndim == 4 and d.shape[0] != beta.size:
+        raise ValueError(f"band_weights: {d.shape[0]} order distributions for {beta.size} albedos")
+    d = np.broadcast_to(d, (beta.size,) + d.shape[-3:])
+    with np.errstate(divide="ignore"):
+        lb = np.log(beta)[:, None, None]
+    return np.einsum("pbj,pbj->pb", d[..., 0], np.exp(np.where(d[..., 0] > 0, lb * d[..., 1], 0.0)))

@@ -33,7 +33,7 @@ long walks of a thick cloud cost (1 - g) of their collisions.
 
 The sun's first flight (order 1) is not tallied: single scattering is ray-marched exactly (Eq. 5). The sky's
 photons are tallied from their first flight. A histogram of the light per exact order (whole cloud, weighted by
-w, collision estimator at the real collisions) gives each band's order distribution (:func:`natscene.scatter.bands.fit_ratios`).
+w, collision estimator at the real collisions) gives each band's order distribution (:func:`natscene.scatter.bands.order_distribution`).
 
 With a weight window (:mod:`.importance`) a photon that enters what the camera sees splits and one deep inside
 the cloud is rouletted, at every collision; each photon carries a weight multiplier. With ``camera_lobe`` > 0 the

@@ -27,7 +27,7 @@ and the multiple scattering of the chosen transport:
 - ``transport: all_orders`` (the default, :mod:`natscene.scatter.allorders`): ``sun_ms`` (B, Ng, Ns, H, W),
   every order >= 2 of the sun's light grouped into bands of orders, and ``sky_ms`` (4, B', Ng, Ns, H, W),
   every order >= 1 of the skylight for the dome's R, G, B distributions and a unit-radiance ground, both
-  without the albedo, with the bands' geometric ratios (``sun_ratios``, ``sky_ratios``: (Ng, Ns, B)) that
+  without the albedo, with the bands' order distributions (``sun_orders``, ``sky_orders``: (Ng, Ns, B, J, 2)) that
   make beta compose in closed form (:mod:`natscene.scatter.bands`);
 - ``transport: dobashi`` (the paper): ``multiple`` (K, Ng, Ns, H, W), E_m^(k)(q, g, e) of Eq. 7 for k in
   ``orders`` = 2..n_m (:mod:`natscene.scatter.multiple`), plus the ambient term through ``s_amb``.
@@ -38,7 +38,7 @@ On disk (``results/precompute/{volume}/{view}/``): ``single.exr`` (channels ``su
 ``transmittance.exr`` (``T.e<e>``), ``geometry.exr`` (``t_c``, ``cos_theta``, ``footprint``), then
 ``allorders.exr`` (``sun.b<i>.g<g>.e<e>``, ``sky.<R|G|B|ground>.b<i>.g<g>.e<e>``; half floats, each channel
 divided by its maximum, the maxima in the header) or ``multiple.exr`` (``k<k>.g<g>.e<e>``, float32), and
-``meta.yaml`` (grids, bands and ratios, the sky dome, sample counts, noise). No wall-clock time is written
+``meta.yaml`` (grids, bands and their order distributions, the sky dome, sample counts, noise). No wall-clock time is written
 into any of them (timings go to the log): a rerun gives the same bytes.
 
 References
@@ -87,8 +87,8 @@ class Tables:
     sky_bands: tuple = ()
     sun_ms: np.ndarray | None = None       # (B, Ng, Ns, H, W)
     sky_ms: np.ndarray | None = None       # (4, B', Ng, Ns, H, W)
-    sun_ratios: np.ndarray | None = None   # (Ng, Ns, B)
-    sky_ratios: np.ndarray | None = None   # (Ng, Ns, B')
+    sun_orders: np.ndarray | None = None   # (Ng, Ns, B, J, 2)
+    sky_orders: np.ndarray | None = None   # (Ng, Ns, B', J, 2)
 
     @property
     def shape(self) -> tuple[int, int]:

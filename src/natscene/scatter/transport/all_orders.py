@@ -41,6 +41,7 @@ import numpy as np
 
 from natscene.errors import InputError
 from natscene.io import read_exr, write_exr
+from natscene.scatter.bands import ORDER_BINS, band_weights, order_distribution
 from natscene.scatter.nodes import brackets
 from natscene.scatter.params import rgb_per_individual
 from natscene.scatter.phase import INV_4PI, hg
@@ -112,9 +113,8 @@ def composed_halves(vi, sun_bands, sky_bands, sky_w, beta: float) -> dict:
     """The two halves of one node's composed multiple scattering at albedo ``beta`` (Σ_b c_b(β) T_b per half):
     ``sun`` (orders >= 2), ``sky`` (R + G + B, orders >= 1) and ``sun_and_sky`` (luminance, weights ``sky_w`` of
     the dome's R, G, B and the ground, :func:`sky_luminance_weights`)."""
-    from natscene.scatter.bands import band_weights
-    cs = band_weights(sun_bands, vi.sun_ratios, beta)[0]
-    ck = band_weights(sky_bands, vi.sky_ratios, beta)[0]
+    cs = band_weights(sun_bands, vi.sun_orders, beta)[0]
+    ck = band_weights(sky_bands, vi.sky_orders, beta)[0]
     sun = [np.tensordot(cs, vi.sun_halves[h], 1) for h in range(2)]
     sky = [np.tensordot(ck, vi.sky_halves[h][:3].sum(0), 1) for h in range(2)]
     both = [sun[h] + np.tensordot(ck, np.tensordot(sky_w, vi.sky_halves[h], 1), 1) for h in range(2)]
@@ -178,7 +178,7 @@ def source_variances(vi, sun_bands, sky_bands, sky_w, foot, single_sun) -> tuple
 
 
 def _multiple(volume, camera, sun_dir, sigmas, gs, settings, sky, seed, log, single):
-    """Band images of the sun's and the sky's light over the (g, extinction) grid, their ratios and noise
+    """Band images of the sun's and the sky's light over the (g, extinction) grid, their order distributions and noise
     (``sigmas``: the volume's unitless sigma_t of each node; ``single``: the precompute's
     :func:`natscene.scatter.single.march_view` of the grid)."""
     from natscene.scatter.allorders import Lighting, Scene, view_images
@@ -194,8 +194,8 @@ def _multiple(volume, camera, sun_dir, sigmas, gs, settings, sky, seed, log, sin
     sb, kb = settings.sun_bands, settings.sky_bands
     sun_ms = np.zeros((len(sb), Ng, Ns, H, W), np.float32)
     sky_ms = np.zeros((4, len(kb), Ng, Ns, H, W), np.float32)
-    sun_r = np.ones((Ng, Ns, len(sb)))
-    sky_r = np.ones((Ng, Ns, len(kb)))
+    sun_r = np.broadcast_to(order_distribution(sb, np.zeros(0)), (Ng, Ns, len(sb), ORDER_BINS, 2)).copy()
+    sky_r = np.broadcast_to(order_distribution(kb, np.zeros(0)), (Ng, Ns, len(kb), ORDER_BINS, 2)).copy()
     noise = {f"{part}.beta{b:g}": [] for part in ("sun", "sky", "sun_and_sky", "pixel") for b in NOISE_BETAS}
     # the composed multiple scattering as the sun (irradiance 1) and the dome light the cloud, in luminance:
     # the dome's R, G, B and the ground (albedo 0.2 under the sun and the dome), and the pixel's single scattering
@@ -220,7 +220,7 @@ def _multiple(volume, camera, sun_dir, sigmas, gs, settings, sky, seed, log, sin
                          split=lambda vi: source_variances(vi, sb, kb, sky_w, foot, single_sun))
         sun_ms[:, j, i] = vi.sun
         sky_ms[:, :, j, i] = vi.sky
-        sun_r[j, i], sky_r[j, i] = vi.sun_ratios, vi.sky_ratios
+        sun_r[j, i], sky_r[j, i] = vi.sun_orders, vi.sky_orders
         for k in counts:
             counts[k] += int(vi.stats.get(k, 0))
         truncated = max(truncated, vi.stats.get("sun_truncated", 0.0))
@@ -238,7 +238,6 @@ def _multiple(volume, camera, sun_dir, sigmas, gs, settings, sky, seed, log, sin
     s = np.asarray(sun_dir, np.float64)
     meta = {
         "sun_bands": [[a, e] for a, e in sb], "sky_bands": [[a, e] for a, e in kb],
-        "sun_ratios": np.round(sun_r, 6).tolist(), "sky_ratios": np.round(sky_r, 6).tolist(),
         "skylight": {"model": "preetham", "turbidity": float(sky.turbidity),
                      "view_mean_rgb": view_rgb.mean(0).tolist(), "irradiance_rgb": irradiance(dome).tolist(),
                      "sun_elevation_sin": float(s[1] / np.linalg.norm(s))},
@@ -330,7 +329,6 @@ def weights(tables, p: dict, P: int):
     Returns sidx, gidx (P, 2), ws (P, 2), wsun (P, 2, 2, B) = w_g w_s L_in c_b(beta), wsky (P, 2, 2, B')
     = w_g w_s c'_b(beta), a (P, 3) the dome's calibration, G (P, 3) the ground radiance (of ``p``'s
     ``ground_albedo``, which the composition needs: the fit gives it, :meth:`AllOrders.fit_fixed`)."""
-    from natscene.scatter.bands import band_weights
     sig = np.asarray(tables.extinction, np.float64)
     gs = np.asarray(tables.g, np.float64)
     sb, kb = tables.sun_bands, tables.sky_bands
@@ -341,7 +339,7 @@ def weights(tables, p: dict, P: int):
     ws = np.stack([1.0 - fs, fs], 1).astype(np.float32)
     wsun = np.zeros((P, 2, 2, len(sb)), np.float32)
     wsky = np.zeros((P, 2, 2, len(kb)), np.float32)
-    sun_r, sky_r = np.asarray(tables.sun_ratios), np.asarray(tables.sky_ratios)
+    sun_r, sky_r = np.asarray(tables.sun_orders), np.asarray(tables.sky_orders)
     for u, wg in enumerate((1.0 - fg, fg)):
         for v, wsv in enumerate((1.0 - fs, fs)):
             w = wg * wsv                                               # (P,)
@@ -436,12 +434,11 @@ class AllOrders(Transport):
     def preview_rows(self, tables, si: int, gis: list) -> list:
         """The sun's multiple scattering (every order >= 2) and the skylight (the dome's R, G, B, in colour), both
         at beta 0.99."""
-        from natscene.scatter.bands import band_weights
         sun, sky = [], []
         for gi in gis:
-            w = band_weights(tables.sun_bands, tables.sun_ratios[gi, si], 0.99)[0]
+            w = band_weights(tables.sun_bands, tables.sun_orders[gi, si], 0.99)[0]
             sun.append(("sun all orders", np.tensordot(w, tables.sun_ms[:, gi, si], 1)))
-            w = band_weights(tables.sky_bands, tables.sky_ratios[gi, si], 0.99)[0]
+            w = band_weights(tables.sky_bands, tables.sky_orders[gi, si], 0.99)[0]
             sky.append(("sky all orders", np.moveaxis(np.tensordot(w, tables.sky_ms[:3, :, gi, si], (0, 1)), 0, -1)))
         return [sun, sky]
 
@@ -460,7 +457,7 @@ class AllOrders(Transport):
         sun_ms, sky_ms, sun_r, sky_r, meta = _multiple(volume, camera, med.sun_dir, sigmas, gs, settings, skylight,
                                                        seed, log or (lambda msg: None), single)
         fields = {"orders": [], "sun_bands": tuple(settings.sun_bands), "sky_bands": tuple(settings.sky_bands),
-                  "sun_ms": sun_ms, "sky_ms": sky_ms, "sun_ratios": sun_r, "sky_ratios": sky_r}
+                  "sun_ms": sun_ms, "sky_ms": sky_ms, "sun_orders": sun_r, "sky_orders": sky_r}
         return fields, meta
 
     def save(self, directory, tables, attrs: dict) -> None:
@@ -471,7 +468,11 @@ class AllOrders(Transport):
         # each channel divided by its maximum: half floats then keep 4.9e-4 relative precision over 14 octaves
         write_exr(f"{directory}/{self.tables_file}", (data / scale[:, None, None]).transpose(1, 2, 0),
                   _names(tables.sun_bands, tables.sky_bands, tables.g, tables.extinction),
-                  attrs={**attrs, "channel_scale": scale.tolist()}, half=True, stage="precompute")
+                  attrs={**attrs, "channel_scale": scale.tolist(),
+                         # each band's order distribution (natscene.scatter.bands.order_distribution) per node
+                         "sun_orders": np.round(tables.sun_orders, 6).tolist(),
+                         "sky_orders": np.round(tables.sky_orders, 6).tolist()},
+                  half=True, stage="precompute")
 
     def load(self, directory, meta: dict, extinctions, gs, orders, shape) -> dict:
         H, W = shape
@@ -481,16 +482,17 @@ class AllOrders(Transport):
         ao = read_exr(path)
         names = _names(sb, kb, gs, extinctions)
         scale = np.asarray(ao.attrs.get("channel_scale"), np.float64)
-        if scale.size != len(names):
-            raise InputError(f"{path}: channel scales missing; rerun the precompute rule")
+        if scale.size != len(names) or "sun_orders" not in ao.attrs or "sky_orders" not in ao.attrs:
+            raise InputError(f"{path}: channel scales or the bands' order distributions missing; rerun the "
+                             "precompute rule")
         stack = np.moveaxis(ao.channel(*names).reshape(H, W, -1), -1, 0)
         data = stack.astype(np.float32) * scale[:, None, None].astype(np.float32)
         n_sun = len(sb) * len(gs) * len(extinctions)
         return {"sun_bands": sb, "sky_bands": kb,
                 "sun_ms": np.ascontiguousarray(data[:n_sun].reshape(len(sb), len(gs), len(extinctions), H, W)),
                 "sky_ms": np.ascontiguousarray(data[n_sun:].reshape(4, len(kb), len(gs), len(extinctions), H, W)),
-                "sun_ratios": np.asarray(meta["sun_ratios"], np.float64),
-                "sky_ratios": np.asarray(meta["sky_ratios"], np.float64)}
+                "sun_orders": np.asarray(ao.attrs["sun_orders"], np.float64),
+                "sky_orders": np.asarray(ao.attrs["sky_orders"], np.float64)}
 
     def compose(self, tables, p: dict, P: int, arrays: Arrays, sky: np.ndarray, backend: str) -> np.ndarray:
         return _compose(tables, p, P, (arrays.s_sun, arrays.T, arrays.sun_ms, arrays.sky_ms), arrays.cos_t,
@@ -506,7 +508,6 @@ class AllOrders(Transport):
         sky_settings, ground_albedo = o.sky_settings, o.ground_albedo
         comps = {}
         from natscene.scatter.allorders import Lighting, Scene, view_images
-        from natscene.scatter.bands import band_weights
         from natscene.scatter.skylight import ground_radiance, irradiance
         st = o.all_orders
         if skylight:
@@ -516,10 +517,10 @@ class AllOrders(Transport):
         scene = Scene(volume, Lighting(med.sun_dir, dome), st, shadow_seed=seed)   # another seed, another run
         vi = view_images(scene, camera, sigma, g, seed=seed)
         a_s = L_in * beta * hg(cos_t, g) * single["S_sun"][0]
-        a_m = L_in * np.tensordot(band_weights(st.sun_bands, vi.sun_ratios, beta)[0], vi.sun, 1)
+        a_m = L_in * np.tensordot(band_weights(st.sun_bands, vi.sun_orders, beta)[0], vi.sun, 1)
         L_sky_lit = np.zeros((H, W, 3), np.float32)
         if dome is not None:
-            ck = band_weights(st.sky_bands, vi.sky_ratios, beta)[0]
+            ck = band_weights(st.sky_bands, vi.sky_orders, beta)[0]
             sky_bands = np.tensordot(ck, np.moveaxis(vi.sky, 1, 0), 1)          # (4, H, W)
             sin_el = max(float(med.sun_dir[1]), 0.0)
             G = ground_radiance(np.broadcast_to(np.asarray(ground_albedo, np.float64), (3,)),
