@@ -137,10 +137,11 @@ def _check(got: dict, refs: dict, label: str):
 TRUNCATED = "max_order 4096: the light that needs more collisions to cross the slab is dropped"
 BAND_MIX = ("beta < 1: one order distribution per band for the whole cloud (what the camera sees of the slab, its "
             "edges included), where the light transmitted through the slab's middle walks far longer")
-G0_HIGH = "the isotropic slab's reflected light reads 1-2 % high at tau >= 100"
+CELLS = ("the cache's cells, voxel layers 2 mean free paths thick, blur the in-scatter's steep fall under the lit "
+         "surface (layers of 1 mean free path: within 1 %, docs/stages/precompute.md)")
 GAPS = {
     ("radiance", 10.0, 0, False): "2.5-3.4 % low",
-    ("radiance", 100.0, 0, True): "1.5-2.2 % high: " + G0_HIGH,
+    ("radiance", 100.0, 0, True): "1.5-2.2 % high: " + CELLS,
     ("radiance", 100.0, 60, True): "3.1 % low at beta 0.99",
     ("radiance", 100.0, 0, False): TRUNCATED,
     ("radiance", 100.0, 60, False): TRUNCATED,
@@ -148,9 +149,9 @@ GAPS = {
     ("radiance", 300.0, 0, False): TRUNCATED,
     ("radiance", 300.0, 60, False): TRUNCATED,
     ("normal", 1.0, True): "2.7 % low",
-    ("normal", 100.0, True): "4 % high",
+    ("normal", 100.0, True): "4 % high: " + CELLS,
     ("normal", 100.0, False): "5 % high (beta >= 0.9999); 1.55 times at beta 0.99: " + BAND_MIX,
-    ("normal", 300.0, True): "2.4-3.6 % high",
+    ("normal", 300.0, True): "2.4-3.6 % high: " + CELLS,
     ("normal", 300.0, False): TRUNCATED,
     ("oblique", 10.0, False): "6-8 % high",
     ("oblique", 100.0, True): "3.6 % low at beta 0.99",
