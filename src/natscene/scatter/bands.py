@@ -42,7 +42,8 @@ import numpy as np
 
 __all__ = ["SUN_BANDS", "SKY_BANDS", "check_bands", "band_table", "ORDER_BINS", "order_distribution", "band_weights"]
 
-SUN_BANDS = ((2, 2), (3, 3), (4, 4), (5, 8), (9, 16), (17, 32), (33, 64), (65, 256), (257, 1024), (1025, 4096), (4097, None))
+SUN_BANDS = ((2, 2), (3, 3), (4, 4), (5, 8), (9, 16), (17, 32), (33, 64), (65, 256), (257, 1024), (1025, 4096),
+             (4097, None))
 SKY_BANDS = ((1, 1), (2, 8), (9, None))
 ORDER_BINS = 16                    # sub-bins of orders per band
 
@@ -112,7 +113,7 @@ def band_weights(bands, orders, beta) -> np.ndarray:
     (a GA population, each individual at its own table node)."""
     beta = np.clip(np.atleast_1d(np.asarray(beta, np.float64)), 0.0, 1.0)
     d = np.asarray(orders, np.float64)
-    if d.ndim != 3 and d.ndim != 4 or d.shape[-1] != 2 or d.shape[-3] != len(bands):
+    if d.ndim not in (3, 4) or d.shape[-1] != 2 or d.shape[-3] != len(bands):
         raise ValueError(f"band_weights: order distributions of shape {d.shape} for {len(bands)} bands")
     if d.ndim == 4 and d.shape[0] != beta.size:
         raise ValueError(f"band_weights: {d.shape[0]} order distributions for {beta.size} albedos")

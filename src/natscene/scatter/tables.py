@@ -37,9 +37,9 @@ The tracers take the volume's unitless sigma_t = e / ``extinction_scale`` (mu_t 
 On disk (``results/precompute/{volume}/{view}/``): ``single.exr`` (channels ``sun.e<e>``, ``amb.e<e>``),
 ``transmittance.exr`` (``T.e<e>``), ``geometry.exr`` (``t_c``, ``cos_theta``, ``footprint``), then
 ``allorders.exr`` (``sun.b<i>.g<g>.e<e>``, ``sky.<R|G|B|ground>.b<i>.g<g>.e<e>``; half floats, each channel
-divided by its maximum, the maxima in the header) or ``multiple.exr`` (``k<k>.g<g>.e<e>``, float32), and
-``meta.yaml`` (grids, bands and their order distributions, the sky dome, sample counts, noise). No wall-clock time is written
-into any of them (timings go to the log): a rerun gives the same bytes.
+divided by its maximum, the maxima and the bands' order distributions in the header) or ``multiple.exr``
+(``k<k>.g<g>.e<e>``, float32), and ``meta.yaml`` (grids, bands, the sky dome, sample counts, noise). No
+wall-clock time is written into any of them (timings go to the log): a rerun gives the same bytes.
 
 References
 ----------
