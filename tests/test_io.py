@@ -26,6 +26,16 @@ def test_exr_roundtrip_float32_bit_exact_with_attributes(tmp_path):
     np.testing.assert_array_equal(img.channel("sun.s0.3"), pix[..., 4])
 
 
+def test_exr_of_more_than_1024_channels_reads_back(tmp_path):
+    """The all-orders tables of the main job are 1035 channels (OpenImageIO's default limit is 1024)."""
+    names = [f"c{i}" for i in range(1500)]
+    pix = np.arange(2 * 3 * len(names), dtype=np.float32).reshape(2, 3, len(names))
+    io.write_exr(tmp_path / "wide.exr", pix, names, half=True)
+    img = io.read_exr(tmp_path / "wide.exr")
+    assert img.channels == names
+    np.testing.assert_allclose(img.pixels, pix, rtol=1e-3)
+
+
 def test_exr_half_within_half_precision(tmp_path):
     pix = np.linspace(0.001, 100, 5 * 7 * 3, dtype=np.float32).reshape(5, 7, 3)
     io.write_exr(tmp_path / "h.exr", pix, half=True)

@@ -52,6 +52,11 @@ __all__ = ["read_exr", "write_exr", "Image", "read_photo", "read_mask", "read_im
 
 ATTR_PREFIX = "natscene:"
 
+# OpenImageIO refuses to read an image of more than 1024 channels by default (a guard against corrupt headers);
+# the all-orders tables hold (sun bands + 4 x sky bands) x g x extinction channels: 23 x 5 x 9 = 1035 in the
+# main job
+oiio.attribute("limits:channels", 1 << 16)
+
 
 class Image(NamedTuple):
     """An image read from disk: pixels (H, W, C) float32, channel names, header attributes."""
