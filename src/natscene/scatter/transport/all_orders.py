@@ -178,8 +178,8 @@ def source_variances(vi, sun_bands, sky_bands, sky_w, foot, single_sun) -> tuple
 
 
 def _multiple(volume, camera, sun_dir, sigmas, gs, settings, sky, seed, log, single):
-    """Band images of the sun's and the sky's light over the (g, extinction) grid, their order distributions and noise
-    (``sigmas``: the volume's unitless sigma_t of each node; ``single``: the precompute's
+    """Band images of the sun's and the sky's light over the (g, extinction) grid, their order distributions and
+    noise (``sigmas``: the volume's unitless sigma_t of each node; ``single``: the precompute's
     :func:`natscene.scatter.single.march_view` of the grid)."""
     from natscene.scatter.allorders import Lighting, Scene, view_images
     from natscene.scatter.skylight import irradiance
