@@ -17,10 +17,13 @@ For every view ray and every sigma_t of a grid, in ONE march (mu_t = sigma_t · 
   dimensionless: Dobashi's L_amb keeps its meaning for a cloud of any size in metres),
 - T(q, sigma_t) = tau(x_v, x_b) = exp(-sigma_t k O(T)) (Eq. 9),
 
-integrated segment by segment exactly for a density that is constant over a step (midpoint value):
-a segment of length h and density rho_i contributes T_prev (1 - a) tau_sun to S_sun and
-T_prev (1 - a) / (sigma_t k) to S_amb, a = exp(-sigma_t k rho_i h) (limit rho_i h at sigma_t = 0). Constant
-media are therefore integrated without discretisation error. Also returned: the distance to the cloud
+integrated segment by segment exactly for a density that is constant over a step (midpoint value) and a sun
+optical depth linear between the step's ends (:func:`sun_segment`): a segment of length h and density rho_i
+contributes T_prev ∫_0^1 a e^(-a s) tau_sun(s) ds to S_sun and T_prev (1 - e^-a) / (sigma_t k) to S_amb,
+a = sigma_t k rho_i h (limit rho_i h at sigma_t = 0). Constant media are therefore integrated without
+discretisation error. The sun's transmittance taken at the step's midpoint instead (T_prev (1 - e^-a) tau_sun)
+made order 1 of a slab under a sun 60 deg from the zenith, seen along the normal at steps of 1 mean free path,
+27 % low (the sun's optical depth changes by 2 across such a step). Also returned: the distance to the cloud
 (first sample with rho >= ``rho_threshold``) and the footprint (the ray meets such a sample).
 
 References
@@ -40,12 +43,23 @@ import mitsuba as mi
 from natscene.scatter.medium import Medium, ray_box_dr
 from natscene.scatter.rays import camera_rays, pixel_mean
 
-__all__ = ["march_view", "one_minus_exp"]
+__all__ = ["march_view", "one_minus_exp", "sun_segment"]
 
 
 def one_minus_exp(x):
     """1 - exp(-x) accurate in float32 also for small x (series below 1e-2)."""
     return dr.select(x < 1e-2, x * (1.0 - x * (0.5 - x * (1.0 / 6.0 - x / 24.0))), 1.0 - dr.exp(-x))
+
+
+def sun_segment(a, x_in, x_out):
+    """∫_0^1 a exp(-a s) exp(-(x_in + (x_out - x_in) s)) ds: a view segment of optical thickness ``a`` (its
+    density constant) whose sun optical depth runs linearly from ``x_in`` to ``x_out``, in closed form,
+    (e^-x_in - e^-(x_out + a)) a / (a + x_out - x_in), its limit a e^-x_in at a + x_out - x_in = 0 (series
+    below 1e-3)."""
+    x = a + x_out - x_in
+    small = dr.abs(x) < 1e-3
+    exact = (dr.exp(-x_in) - dr.exp(-(x_out + a))) * a / dr.select(small, 1.0, x)
+    return dr.select(small, a * dr.exp(-x_in) * (1.0 - 0.5 * x), exact)
 
 
 @dr.syntax
@@ -59,26 +73,32 @@ def _march(med: Medium, o, d, sigmas, step, rho_threshold, with_sun: bool):
     t_hit = mi.Float(-1.0)
     s_sun = [dr.zeros(mi.Float, dr.width(o)) for _ in sigmas]
     s_amb = [dr.zeros(mi.Float, dr.width(o)) for _ in sigmas]
+    d_in = mi.Float(0.0)                  # the sun depth where the segment begins
+    eps = 1e-3 * h                        # the ends just inside the box: on a face, the sun ray's box test is 0 * inf
+    if with_sun:
+        d_in = med.sun_depth(o + d * (t0 + eps))
     i = mi.Float(0.0)
     while i < n:
         t = t0 + (i + 0.5) * h
         p = o + d * t
         r = med.rho(p)
         if with_sun:
-            dsun = med.sun_depth(p)
+            d_out = med.sun_depth(o + d * dr.minimum(t0 + (i + 1.0) * h, t1 - eps))
         else:
-            dsun = mi.Float(0.0)
+            d_out = mi.Float(0.0)
         for j in range(len(sigmas)):
             sig = sigmas[j]
             if sig > 0:
                 tv = dr.exp(-sig * k * depth)
-                one_minus_a = one_minus_exp(sig * k * r * h)
-                s_sun[j] += tv * one_minus_a * dr.exp(-sig * k * dsun)
+                a = sig * k * r * h
+                one_minus_a = one_minus_exp(a)
+                s_sun[j] += tv * sun_segment(a, sig * k * d_in, sig * k * d_out)
                 s_amb[j] += tv * one_minus_a / (sig * k)
             else:
                 s_amb[j] += r * h
         t_hit = dr.select((t_hit < 0) & (r >= rho_threshold), t0 + i * h, t_hit)
         depth += r * h
+        d_in = d_out
         i += 1.0
     return depth, t_hit, s_sun, s_amb
 
