@@ -259,7 +259,8 @@ def _caches(scene: Scene, bands) -> tuple:
 def _images(scene: Scene, camera, sigma: float, halves, bands, channels: int, voxel_integrals,
             k_min: int = 1) -> np.ndarray:
     """(2 halves, channels, bands, H, W) images of the two halves' tallies; a cache whose bands all end below
-    order ``k_min`` holds no tallies and is not gathered (zeros)."""
+    order ``k_min`` holds no tallies and is not gathered (zeros), nor is a band that begins past ``max_order``
+    (the walks end there: the sun's band from 4097 without ``similarity_order``)."""
     from natscene.scatter.inscatter import cache_fields, gather
     st = scene.settings
     sig_k = sigma * scene.volume.extinction_scale
@@ -267,14 +268,17 @@ def _images(scene: Scene, camera, sigma: float, halves, bands, channels: int, vo
     for ci, (f, sel) in enumerate(_caches(scene, bands)):
         if all(bands[i][1] is not None and bands[i][1] < k_min for i in sel):
             continue
+        live = [j for j, i in enumerate(sel) if bands[i][0] <= st.max_order]
+        if not live:
+            continue
         width = st.guide_width[0 if f == scene.factors[0] and ci == 0 else 1]
         guide = None
         if width > 0:   # the cells' optical depth toward the camera: the mean of their voxels'
             from natscene.scatter.inscatter import block_sum
             guide = block_sum(scene.camera_depth_voxels(camera), f) / f ** 3 * sig_k
         q = scene.weighted_integrals(voxel_integrals, sigma, f)
-        E = _gather_halves(scene, camera, sigma, [h.numerators[ci] for h in halves], q, f, guide, width)
-        out[:, :, sel] = E.reshape(2, channels, len(sel), camera.height, camera.width)
+        E = _gather_halves(scene, camera, sigma, [h.numerators[ci][:, live] for h in halves], q, f, guide, width)
+        out[:, :, [sel[j] for j in live]] = E.reshape(2, channels, len(live), camera.height, camera.width)
     return out
 
 
