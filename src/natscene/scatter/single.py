@@ -22,8 +22,8 @@ optical depth linear between the step's ends (:func:`sun_segment`): a segment of
 contributes T_prev ∫_0^1 a e^(-a s) tau_sun(s) ds to S_sun and T_prev (1 - e^-a) / (sigma_t k) to S_amb,
 a = sigma_t k rho_i h (limit rho_i h at sigma_t = 0). Constant media are therefore integrated without
 discretisation error. The sun's transmittance taken at the step's midpoint instead (T_prev (1 - e^-a) tau_sun)
-made order 1 of a slab under a sun 60 deg from the zenith, seen along the normal at steps of 1 mean free path,
-27 % low (the sun's optical depth changes by 2 across such a step). Also returned: the distance to the cloud
+is exact only where it is constant along the step, not in a thick cloud's lit skin (docs/stages/precompute.md,
+"Single scattering and transmittance"). Also returned: the distance to the cloud
 (first sample with rho >= ``rho_threshold``) and the footprint (the ray meets such a sample).
 
 References
