@@ -137,9 +137,10 @@ def _check(got: dict, refs: dict, label: str):
 TRUNCATED = "max_order 4096: the light that needs more collisions to cross the slab is dropped"
 BAND_MIX = ("beta < 1: one order distribution per band for the whole cloud (what the camera sees of the slab, its "
             "edges included), where the light transmitted through the slab's middle walks far longer")
-FACE = ("the visibility weight's camera depth is clamped over the half voxel at the box's face, which the slab fills "
-        "(real clouds end inside their box): the cells' mean in-scatter leans to their deeper part (the depth "
-        "extrapolated to the face: 0.99-1.00 at tau 100, g 0; docs/stages/precompute.md, Limits)")
+FACE = ("the visibility weight in thick voxels: the camera depth, trilinear from the voxel centres, is held over the "
+        "half voxel at the box's face that the slab fills and overestimated where the density rises inward, so the "
+        "cells' mean in-scatter leans to their deeper part (the depth extrapolated to the face: 0.99-1.00 at tau 100, "
+        "g 0; a slab ending inside its box: 1.02-1.04; docs/stages/precompute.md, Limits)")
 GAPS = {
     ("radiance", 10.0, 0, False): "2.5-3.4 % low",
     ("radiance", 100.0, 0, True): "3.2-3.4 % high: " + FACE,
