@@ -62,7 +62,8 @@ import numpy as np
 from natscene.scatter.bands import SKY_BANDS, SUN_BANDS, order_distribution
 
 __all__ = ["AllOrdersSettings", "settings_from_config", "render_settings", "frame_settings", "Lighting", "Scene",
-           "ViewImages", "view_images", "standard_error", "budget_scale", "source_scales"]
+           "ViewImages", "view_images", "weight_window", "photons_for", "standard_error",
+           "budget_scale", "source_scales"]
 
 FINE_UP_TO_ORDER = 4
 
