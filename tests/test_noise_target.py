@@ -126,3 +126,22 @@ def test_bad_noise_target():
                     (default_settings(AllOrdersSettings, max_budget_scale=0.5), "max_budget_scale")):
         with pytest.raises(InputError, match=f"precompute.all_orders.{key}"):
             precompute(vol, CAM, SUN, extinctions=[15.0], gs=[0.5], all_orders=st)
+
+
+def test_the_whole_run_is_the_mean_of_its_halves():
+    """A frame's images (``halves=False``: the halves' tallies averaged before one gather) are the mean of the two
+    halves' images of the same photons: the cache's ratio and the view march are linear in the tallies. A noise
+    target needs the halves."""
+    from natscene.scatter.skylight import uniform_dome
+    vol = blob_volume()
+    st = default_settings(AllOrdersSettings, sun_collisions=200_000, sky_collisions=100_000, fine_voxels=1,
+                          coarse_voxels=2)
+    scene = Scene(vol, Lighting(SUN, uniform_dome(0.5)), st)
+    split = view_images(scene, CAM, SIGMA, G, seed=3)
+    whole = view_images(scene, CAM, SIGMA, G, seed=3, halves=False)
+    assert split.sun_halves.shape[0] == 2 and whole.sun_halves.shape[0] == 1
+    for a, b in ((whole.sun, split.sun), (whole.sky, split.sky)):
+        assert b.max() > 0
+        np.testing.assert_allclose(a, b, rtol=0, atol=1e-5 * float(b.max()))
+    with pytest.raises(ValueError, match="halves"):
+        view_images(scene, CAM, SIGMA, G, seed=3, noise=_estimate, halves=False)

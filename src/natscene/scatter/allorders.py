@@ -28,7 +28,9 @@ For one view (camera + sun), one sigma_t and one g this module computes, with ph
   closed form (:func:`natscene.scatter.bands.band_weights`);
 - a noise estimate: the photons are traced as two independent halves, and the images of the halves give
   each pixel's standard error (the cache and the gather are linear in the tallies, so the mean of the two
-  halves is exactly the result of tracing them together).
+  halves is exactly the result of tracing them together). A caller that needs no noise figure (a shot's frame)
+  asks for the whole run: the halves' tallies are averaged before the gather, whose cost grows with the number
+  of images it gathers, so one gather serves both.
 
 Low orders vary over a mean free path near the lit surface and are cached in cells of ``fine_voxels``;
 bands from order 5 on are smooth (they have diffused over several transport mean free paths) and use
@@ -160,7 +162,8 @@ class Lighting:
 @dataclass
 class ViewImages:
     """Band images of the two independent halves of the photons: ``sun_halves`` (2, B_sun, H, W),
-    ``sky_halves`` (2, 4, B_sky, H, W) or None; the bands' order distributions; counts."""
+    ``sky_halves`` (2, 4, B_sky, H, W) or None (a leading 1 instead of 2: the whole run, no halves); the bands'
+    order distributions; counts."""
 
     sun_halves: np.ndarray
     sky_halves: np.ndarray | None
@@ -258,14 +261,16 @@ def _caches(scene: Scene, bands) -> tuple:
 
 
 def _images(scene: Scene, camera, sigma: float, halves, bands, channels: int, voxel_integrals,
-            k_min: int = 1) -> np.ndarray:
-    """(2 halves, channels, bands, H, W) images of the two halves' tallies; a cache whose bands all end below
+            k_min: int = 1, split: bool = True) -> np.ndarray:
+    """(2 halves, channels, bands, H, W) images of the two halves' tallies (``split`` False: (1, ...), the image of
+    their mean, gathered once: the gather is linear in the tallies); a cache whose bands all end below
     order ``k_min`` holds no tallies and is not gathered (zeros), nor is a band that begins past ``max_order``
     (the walks end there: the sun's band from 4097 without ``similarity_order``)."""
     from natscene.scatter.inscatter import cache_fields, gather
     st = scene.settings
     sig_k = sigma * scene.volume.extinction_scale
-    out = np.zeros((2, channels, len(bands), camera.height, camera.width), np.float32)
+    m = 2 if split else 1
+    out = np.zeros((m, channels, len(bands), camera.height, camera.width), np.float32)
     for ci, (f, sel) in enumerate(_caches(scene, bands)):
         if all(bands[i][1] is not None and bands[i][1] < k_min for i in sel):
             continue
@@ -278,14 +283,17 @@ def _images(scene: Scene, camera, sigma: float, halves, bands, channels: int, vo
             from natscene.scatter.inscatter import block_sum
             guide = block_sum(scene.camera_depth_voxels(camera), f) / f ** 3 * sig_k
         q = scene.weighted_integrals(voxel_integrals, sigma, f)
-        E = _gather_halves(scene, camera, sigma, [h.numerators[ci][:, live] for h in halves], q, f, guide, width)
-        out[:, :, [sel[j] for j in live]] = E.reshape(2, channels, len(live), camera.height, camera.width)
+        nums = [h.numerators[ci][:, live] for h in halves]
+        if not split:
+            nums = [(nums[0] + nums[1]) / 2]
+        E = _gather_halves(scene, camera, sigma, nums, q, f, guide, width)
+        out[:, :, [sel[j] for j in live]] = E.reshape(m, channels, len(live), camera.height, camera.width)
     return out
 
 
 def _gather_halves(scene: Scene, camera, sigma: float, numerators, q, factor: int, guide=None,
                    width: float = 0.0) -> np.ndarray:
-    """The view integrals (2 x fields, H, W) of both halves' cache ``numerators`` (each (..., cz, cy, cx)) over the
+    """The view integrals (halves x fields, H, W) of the halves' cache ``numerators`` (each (..., cz, cy, cx)) over the
     cells' ``q`` (:func:`natscene.scatter.inscatter.cache_fields`, :func:`natscene.scatter.inscatter.gather`)."""
     from natscene.scatter.inscatter import cache_fields, gather
     st = scene.settings
@@ -404,10 +412,12 @@ class _Part:
 
 
 def _part(scene: Scene, source, sigma: float, g: float, camera, n_photons: int, bands, k_min: int, seed: int,
-          depth, window, channels: int, vint) -> _Part:
-    """``n_photons`` of ``source`` traced as two halves and gathered into band images."""
+          depth, window, channels: int, vint, split: bool = True) -> _Part:
+    """``n_photons`` of ``source`` traced as two halves and gathered into band images (of each half, or of the
+    whole run: ``split``)."""
     halves = _trace_halves(scene, source, sigma, g, camera, n_photons, bands, k_min, seed, depth, window)
-    return _Part(_images(scene, camera, sigma, halves, bands, channels, vint, k_min), sum(h.histogram for h in halves),
+    return _Part(_images(scene, camera, sigma, halves, bands, channels, vint, k_min, split),
+                 sum(h.histogram for h in halves),
                  int(sum(h.photons for h in halves)), int(sum(h.collisions for h in halves)),
                  float(max(h.truncated for h in halves)))
 
@@ -458,7 +468,7 @@ def source_scales(variances, costs, need: float, fixed: float = 0.0) -> list:
 
 
 def view_images(scene: Scene, camera, sigma: float, g: float, seed: int = 0, noise=None,
-                split=None) -> ViewImages:
+                split=None, halves: bool = True) -> ViewImages:
     """Band images of the sun's and the sky's light at (sigma, g) for ``camera`` (see the module docstring).
 
     ``noise``: a function of the :class:`ViewImages` that returns the node's relative standard error (median,
@@ -467,13 +477,18 @@ def view_images(scene: Scene, camera, sigma: float, g: float, seed: int = 0, noi
     source's budget: the noisy nodes (thick, strongly forward scattering) get the photons, a node within the
     target none. ``split``: a function of the :class:`ViewImages` that returns the sun's and the sky's shares
     of the pixel's variance; with it the top-up goes to the sources by :func:`source_scales` (costs: their
-    collisions), without it both sources get the same factor."""
+    collisions), without it both sources get the same factor. ``halves`` False: the images of the whole run
+    (a leading axis of 1), gathered once instead of once per half; no noise figure then (``noise`` must be None).
+    """
     st = scene.settings
     H, W = camera.height, camera.width
     nb_sun, nb_sky = len(st.sun_bands), len(st.sky_bands)
+    if noise is not None and not halves:
+        raise ValueError("view_images: a noise target needs the two halves (halves=True)")
+    m = 2 if halves else 1
     if sigma <= 0:
-        sky = np.zeros((2, 4, nb_sky, H, W), np.float32) if scene.sky is not None else None
-        return ViewImages(np.zeros((2, nb_sun, H, W), np.float32), sky, order_distribution(st.sun_bands, np.zeros(0)),
+        sky = np.zeros((m, 4, nb_sky, H, W), np.float32) if scene.sky is not None else None
+        return ViewImages(np.zeros((m, nb_sun, H, W), np.float32), sky, order_distribution(st.sun_bands, np.zeros(0)),
                           None if sky is None else order_distribution(st.sky_bands, np.zeros(0)), {})
     from natscene.scatter.inscatter import weighted_voxel_integrals
     depth = scene.camera_depth_voxels(camera)
@@ -496,7 +511,7 @@ def view_images(scene: Scene, camera, sigma: float, g: float, seed: int = 0, noi
     def run(scales, round_: int) -> list:
         return [None if sc <= 0 else
                 _part(scene, src, sigma, g, camera, max(2, int(round(n * sc))), bands, k_min,
-                      s + 1_000_003 * round_, depth, w, ch, vint)
+                      s + 1_000_003 * round_, depth, w, ch, vint, halves)
                 for (src, n, bands, k_min, s, w, ch), sc in zip(jobs, scales)]
 
     def result(parts) -> ViewImages:
@@ -504,7 +519,7 @@ def view_images(scene: Scene, camera, sigma: float, g: float, seed: int = 0, noi
         sky_halves = None if sky is None else sky.halves
         if sky is not None and order1 is not None:      # band (1) by shadow rays, the photons' from order 2 on
             sky_halves = sky.halves.copy()
-            sky_halves[:, :, 0] = order1
+            sky_halves[:, :, 0] = order1 if halves else order1.mean(0, keepdims=True)
         stats = dict(sun_photons=sun.photons, sun_collisions=sun.collisions, sun_truncated=sun.truncated)
         if sky is not None:
             stats.update(sky_photons=sky.photons, sky_collisions=sky.collisions,

@@ -515,7 +515,7 @@ class AllOrders(Transport):
         else:
             dome = None
         scene = Scene(volume, Lighting(med.sun_dir, dome), st, shadow_seed=seed)   # another seed, another run
-        vi = view_images(scene, camera, sigma, g, seed=seed)
+        vi = view_images(scene, camera, sigma, g, seed=seed, halves=False)       # a frame needs no noise figure
         a_s = L_in * beta * hg(cos_t, g) * single["S_sun"][0]
         a_m = L_in * np.tensordot(band_weights(st.sun_bands, vi.sun_orders, beta)[0], vi.sun, 1)
         L_sky_lit = np.zeros((H, W, 3), np.float32)
