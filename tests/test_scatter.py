@@ -270,3 +270,26 @@ def test_bad_input(tables):
         precompute(blob_volume(), CAM, SUN, extinctions=[0.5, 0.2])
     with pytest.raises(InputError):
         make_medium(Volume(np.zeros((4, 4, 4), np.float32), np.zeros(3), np.ones(3), 1.0))
+
+
+def test_gather_passes_over_empty_space_exactly():
+    """The cache gather's march passes over empty majorant cells in whole steps: the same sample points, so the
+    same images as a march that takes every step (two lumps far apart in a wide box, random cache fields)."""
+    from natscene.scatter.inscatter import gather
+    from natscene.scatter.majorant import majorant_grid
+    from natscene.scatter.reference_scene import CAM, SUN
+    nx, ny, nz = 72, 24, 32
+    z, y, x = np.meshgrid(np.linspace(-1, 1, nz), np.linspace(0, 1, ny), np.linspace(-1, 1, nx), indexing="ij")
+    lump = lambda cx, r: np.clip(1 - ((x - cx) ** 2 + ((y - 0.5) / 0.6) ** 2 + z ** 2) / r ** 2, 0, 1)
+    d = (lump(-0.75, 0.25) + 0.5 * lump(0.7, 0.2)).astype(np.float32)
+    vol = Volume(d, *placement((nx, ny, nz)), 80.0)
+    med = make_medium(vol, SUN)
+    grid = majorant_grid(d, vol.bbox_min, vol.bbox_max, 4)
+    assert (np.asarray(grid.dr_skip) > 0).any()
+    rng = np.random.default_rng(0)
+    den = (d.reshape(nz // 2, 2, ny // 2, 2, nx // 2, 2).sum((1, 3, 5)) + 1e-3).astype(np.float32)
+    caches = (rng.random((3,) + den.shape) * den).astype(np.float32)
+    every = gather(med, CAM, 0.5, caches, den, 2, 0.5, 1)
+    skipping = gather(med, CAM, 0.5, caches, den, 2, 0.5, 1, grid=grid)
+    assert every.max() > 0.05
+    np.testing.assert_allclose(skipping, every, rtol=0, atol=1e-6 * float(every.max()))

@@ -300,7 +300,7 @@ def _gather_halves(scene: Scene, camera, sigma: float, numerators, q, factor: in
     fields = [cache_fields(n, q, guide=guide, guide_width=width) for n in numerators]
     stack = np.concatenate([c.reshape(-1, *c.shape[-3:]) for c, _ in fields])       # (2 * fields, cz, cy, cx)
     return gather(scene.med, camera, sigma, stack, fields[0][1], factor, st.step_voxels, st.supersample,
-                  scene.bounds)
+                  scene.bounds, scene.grid)
 
 
 def _sky_order1_images(scene: Scene, camera, sigma: float, g: float, voxel_integrals) -> np.ndarray:

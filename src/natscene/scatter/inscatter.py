@@ -177,8 +177,25 @@ def cache_fields(numerators: np.ndarray, weighted_integrals: np.ndarray, guide: 
     return (num / top).astype(np.float32), (den / top).astype(np.float32)
 
 
+def _steps_to_skip(grid, p, h):
+    """Steps of length ``h`` that the march can pass over from ``p``: in an empty majorant cell (whose trilinear
+    density is zero throughout) every step within its safe jump (:func:`natscene.scatter.majorant.majorant_grid`)
+    adds nothing; 1 elsewhere (the step at ``p`` itself)."""
+    cx, cy, cz = grid.shape
+    lo = mi.ScalarVector3f(*[float(v) for v in grid.origin])
+    cell = mi.ScalarVector3f(*[float(v) for v in grid.cell])
+    c = (p - lo) / cell
+    ix = mi.UInt32(dr.clip(dr.floor(c.x), 0, cx - 1))
+    iy = mi.UInt32(dr.clip(dr.floor(c.y), 0, cy - 1))
+    iz = mi.UInt32(dr.clip(dr.floor(c.z), 0, cz - 1))
+    flat = (iz * cy + iy) * cx + ix
+    empty = dr.gather(mi.Float, grid.dr_values, flat) <= 0
+    jump = dr.gather(mi.Float, grid.dr_skip, flat)
+    return dr.select(empty, dr.maximum(dr.floor(jump / dr.maximum(h, 1e-30)), 1.0), 1.0)
+
+
 @dr.syntax
-def _march(med, tex, nch: int, o, d, sig_k: float, step: float, lo, cache_ext, box_lo, box_hi):
+def _march(med, tex, nch: int, o, d, sig_k: float, step: float, lo, cache_ext, box_lo, box_hi, grid=None):
     t0, t1 = ray_box_dr(o, d, box_lo, box_hi)
     length = dr.maximum(t1 - t0, 0.0)
     n = dr.select(length > 0, dr.maximum(dr.ceil(length / step), 1.0), 0.0)
@@ -196,17 +213,23 @@ def _march(med, tex, nch: int, o, d, sig_k: float, step: float, lo, cache_ext, b
             for j in range(nch):
                 acc[j] += q * s[j]
         trans *= 1.0 - a
-        i += 1.0
+        if grid is not None:
+            i += _steps_to_skip(grid, p, h)
+        else:
+            i += 1.0
     return acc
 
 
 def gather(med, camera, sigma: float, caches: np.ndarray, denominators: np.ndarray, factor: int,
-           step_voxels: float = 0.5, supersample: int = 4, bounds=None) -> np.ndarray:
+           step_voxels: float = 0.5, supersample: int = 4, bounds=None, grid=None) -> np.ndarray:
     """E (C, H, W) float32: the view integral of the C cache fields S = ``caches`` / ``denominators``
     ((C, cz, cy, cx) and (cz, cy, cx), :func:`cache_fields`), each interpolated trilinearly before the division.
 
     ``bounds``: (lo, hi) world box the march is limited to (where the density is non-zero; default the
-    volume's box)."""
+    volume's box). ``grid``: the volume's :class:`natscene.scatter.majorant.MajorantGrid`, whose empty cells the
+    march passes over in whole steps (the same sample points, the same result: a step in an empty cell adds
+    nothing); a march evaluates every image at every step it takes, so on a cloud that fills a small part of its
+    box most of the work is in empty space."""
     caches = np.asarray(caches, np.float32)
     C = caches.shape[0]
     W, H = camera.width, camera.height
@@ -222,7 +245,7 @@ def gather(med, camera, sigma: float, caches: np.ndarray, denominators: np.ndarr
     box_lo, box_hi = bounds if bounds is not None else (med.bbox_min, med.bbox_max)
     o, d, _ = camera_rays(camera, supersample, stratified=supersample > 1)
     acc = _march(med, tex, C, o, d, dr.opaque(mi.Float, float(sigma) * med.scale), med.voxel * step_voxels, lo, cache_ext,
-                 np.asarray(box_lo, np.float64), np.asarray(box_hi, np.float64))
+                 np.asarray(box_lo, np.float64), np.asarray(box_hi, np.float64), grid)
     return np.stack([pixel_mean(a, supersample, W, H) for a in acc])
 
 
