@@ -298,7 +298,7 @@ def _gather_halves(scene: Scene, camera, sigma: float, numerators, q, factor: in
     from natscene.scatter.inscatter import cache_fields, gather
     st = scene.settings
     fields = [cache_fields(n, q, guide=guide, guide_width=width) for n in numerators]
-    stack = np.concatenate([c.reshape(-1, *c.shape[-3:]) for c, _ in fields])       # (2 * fields, cz, cy, cx)
+    stack = np.concatenate([c.reshape(-1, *c.shape[-3:]) for c, _ in fields])       # (halves * fields, cz, cy, cx)
     return gather(scene.med, camera, sigma, stack, fields[0][1], factor, st.step_voxels, st.supersample,
                   scene.bounds, scene.grid)
 

@@ -34,7 +34,8 @@ exactly for a density constant over it, as :mod:`.single`:
 
     E_b(q) = Σ_segments T_prev (1 - exp(-sigma_t k rho_i h)) S_b(x_i),
 
-and stops where the view transmittance falls below 1e-4.
+and stops where the view transmittance falls below 1e-4. It passes over the empty cells of the volume's
+majorant grid (:class:`natscene.scatter.majorant.MajorantGrid`) in whole steps: the same sample points.
 
 References
 ----------
@@ -177,23 +178,6 @@ def cache_fields(numerators: np.ndarray, weighted_integrals: np.ndarray, guide: 
     return (num / top).astype(np.float32), (den / top).astype(np.float32)
 
 
-def _steps_to_skip(grid, p, h):
-    """Steps of length ``h`` that the march can pass over from ``p``: in an empty majorant cell (whose trilinear
-    density is zero throughout) every step within its safe jump (:func:`natscene.scatter.majorant.majorant_grid`)
-    adds nothing; 1 elsewhere (the step at ``p`` itself)."""
-    cx, cy, cz = grid.shape
-    lo = mi.ScalarVector3f(*[float(v) for v in grid.origin])
-    cell = mi.ScalarVector3f(*[float(v) for v in grid.cell])
-    c = (p - lo) / cell
-    ix = mi.UInt32(dr.clip(dr.floor(c.x), 0, cx - 1))
-    iy = mi.UInt32(dr.clip(dr.floor(c.y), 0, cy - 1))
-    iz = mi.UInt32(dr.clip(dr.floor(c.z), 0, cz - 1))
-    flat = (iz * cy + iy) * cx + ix
-    empty = dr.gather(mi.Float, grid.dr_values, flat) <= 0
-    jump = dr.gather(mi.Float, grid.dr_skip, flat)
-    return dr.select(empty, dr.maximum(dr.floor(jump / dr.maximum(h, 1e-30)), 1.0), 1.0)
-
-
 @dr.syntax
 def _march(med, tex, nch: int, o, d, sig_k: float, step: float, lo, cache_ext, box_lo, box_hi, grid=None):
     t0, t1 = ray_box_dr(o, d, box_lo, box_hi)
@@ -213,8 +197,8 @@ def _march(med, tex, nch: int, o, d, sig_k: float, step: float, lo, cache_ext, b
             for j in range(nch):
                 acc[j] += q * s[j]
         trans *= 1.0 - a
-        if grid is not None:
-            i += _steps_to_skip(grid, p, h)
+        if grid is not None:  # in an empty cell every step within its safe jump adds nothing
+            i += dr.maximum(dr.floor(grid.empty_jump(p) / dr.maximum(h, 1e-30)), 1.0)
         else:
             i += 1.0
     return acc

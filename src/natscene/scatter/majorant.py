@@ -54,6 +54,21 @@ class MajorantGrid:
     dr_values: object       # mi.Float, flat
     dr_skip: object = None  # mi.Float, flat: safe jump through an empty cell (chessboard distance - 1, cells)
 
+    def empty_jump(self, p):
+        """At points ``p`` (mi.Point3f): the distance that a ray from ``p`` can travel in any direction without
+        meeting density where ``p``'s cell is empty (its chessboard distance to the nearest occupied cell, less
+        one, in cell widths), -1 where the cell holds density."""
+        cx, cy, cz = self.shape
+        lo = mi.ScalarVector3f(*[float(v) for v in self.origin])
+        cell = mi.ScalarVector3f(*[float(v) for v in self.cell])
+        c = (p - lo) / cell
+        ix = mi.UInt32(dr.clip(dr.floor(c.x), 0, cx - 1))
+        iy = mi.UInt32(dr.clip(dr.floor(c.y), 0, cy - 1))
+        iz = mi.UInt32(dr.clip(dr.floor(c.z), 0, cz - 1))
+        flat = (iz * cy + iy) * cx + ix
+        empty = dr.gather(mi.Float, self.dr_values, flat) <= 0
+        return dr.select(empty, dr.gather(mi.Float, self.dr_skip, flat), -1.0)
+
     def occupied_bounds(self) -> tuple[np.ndarray, np.ndarray]:
         """World box of the cells with a non-zero majorant (where anything can collide)."""
         nz = np.argwhere(self.values > 0)
