@@ -261,15 +261,15 @@ def _caches(scene: Scene, bands) -> tuple:
 
 
 def _images(scene: Scene, camera, sigma: float, halves, bands, channels: int, voxel_integrals,
-            k_min: int = 1, split: bool = True) -> np.ndarray:
-    """(2 halves, channels, bands, H, W) images of the two halves' tallies (``split`` False: (1, ...), the image of
+            k_min: int = 1, per_half: bool = True) -> np.ndarray:
+    """(2 halves, channels, bands, H, W) images of the two halves' tallies (``per_half`` False: (1, ...), the image of
     their mean, gathered once: the gather is linear in the tallies); a cache whose bands all end below
     order ``k_min`` holds no tallies and is not gathered (zeros), nor is a band that begins past ``max_order``
     (the walks end there: the sun's band from 4097 without ``similarity_order``)."""
     from natscene.scatter.inscatter import cache_fields, gather
     st = scene.settings
     sig_k = sigma * scene.volume.extinction_scale
-    m = 2 if split else 1
+    m = 2 if per_half else 1
     out = np.zeros((m, channels, len(bands), camera.height, camera.width), np.float32)
     for ci, (f, sel) in enumerate(_caches(scene, bands)):
         if all(bands[i][1] is not None and bands[i][1] < k_min for i in sel):
@@ -284,7 +284,7 @@ def _images(scene: Scene, camera, sigma: float, halves, bands, channels: int, vo
             guide = block_sum(scene.camera_depth_voxels(camera), f) / f ** 3 * sig_k
         q = scene.weighted_integrals(voxel_integrals, sigma, f)
         nums = [h.numerators[ci][:, live] for h in halves]
-        if not split:
+        if not per_half:
             nums = [(nums[0] + nums[1]) / 2]
         E = _gather_halves(scene, camera, sigma, nums, q, f, guide, width)
         out[:, :, [sel[j] for j in live]] = E.reshape(m, channels, len(live), camera.height, camera.width)
@@ -412,11 +412,11 @@ class _Part:
 
 
 def _part(scene: Scene, source, sigma: float, g: float, camera, n_photons: int, bands, k_min: int, seed: int,
-          depth, window, channels: int, vint, split: bool = True) -> _Part:
+          depth, window, channels: int, vint, per_half: bool = True) -> _Part:
     """``n_photons`` of ``source`` traced as two halves and gathered into band images (of each half, or of the
-    whole run: ``split``)."""
+    whole run: ``per_half``)."""
     halves = _trace_halves(scene, source, sigma, g, camera, n_photons, bands, k_min, seed, depth, window)
-    return _Part(_images(scene, camera, sigma, halves, bands, channels, vint, k_min, split),
+    return _Part(_images(scene, camera, sigma, halves, bands, channels, vint, k_min, per_half),
                  sum(h.histogram for h in halves),
                  int(sum(h.photons for h in halves)), int(sum(h.collisions for h in halves)),
                  float(max(h.truncated for h in halves)))
