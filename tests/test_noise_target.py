@@ -37,10 +37,10 @@ def _estimate(vi):
     return float(np.median(rel)), float(np.percentile(rel, 95))
 
 
-def _node(vol, collisions, seed, target=(0.0, 0.0)):
+def _node(vol, collisions, seed, target=(0.0, 0.0), start=None):
     st = default_settings(AllOrdersSettings, sun_collisions=collisions, fine_voxels=1, coarse_voxels=2,
                           noise_target=target, max_budget_scale=16.0)
-    return view_images(Scene(vol, Lighting(SUN), st), CAM, SIGMA, G, seed=seed, noise=_estimate)
+    return view_images(Scene(vol, Lighting(SUN), st), CAM, SIGMA, G, seed=seed, noise=_estimate, start=start)
 
 
 def test_budget_scale_follows_the_inverse_square_root():
@@ -117,6 +117,29 @@ def test_a_topped_up_node_meets_its_target_with_the_error_it_estimates():
     assert 0.75 <= np.mean(falls) <= 1.25
     assert 0.8 <= np.mean(reads) <= 1.5
     assert np.all(np.abs(np.array(means) - 1) <= 0.02), means
+
+
+def test_a_node_started_at_its_need_meets_the_target_in_one_pass():
+    """A node's ``stats["need"]`` (its photons scaled by (error / target)²) as the first pass of an independent
+    node of the same (sigma, g) (another seed): the error falls as 1 / sqrt(photons), so that node traces the
+    multiple asked (photons within 3 %) and meets the target (within the estimate's own scatter, 15 %) with
+    little or no top-up; a start below START_MIN is raised to it."""
+    from natscene.scatter.allorders import START_MIN
+    vol = blob_volume()
+    base = _node(vol, 300_000, seed=1)
+    target = (_estimate(base)[0] / 2, 0.0)
+    first = _node(vol, 300_000, seed=1, target=target)
+    need = first.stats["need"]
+    assert need[0] > 2.5
+    again = _node(vol, 300_000, seed=5, target=target, start=need)
+    print(f"need {need[0]:.2f}, first pass {again.stats['first_pass']}, scale {again.stats['budget_scale']:.2f}, "
+          f"estimate {_estimate(again)[0]:.4f} against {target[0]:.4f}")
+    assert again.stats["first_pass"][0] == pytest.approx(need[0])
+    assert again.stats["budget_scale"] <= need[0] * 1.3
+    assert _estimate(again)[0] <= target[0] * 1.15
+    low = _node(vol, 300_000, seed=2, target=(0.5, 0.0), start=[0.01])
+    assert low.stats["first_pass"] == [START_MIN]
+    assert low.stats["sun_photons"] / base.stats["sun_photons"] == pytest.approx(START_MIN, rel=0.03)
 
 
 def test_bad_noise_target():

@@ -45,7 +45,9 @@ measures the collisions per photon at this sigma_t, g), because the noise of a c
 collisions in it, and a thin cloud makes fewer collisions per photon than a thick one. With ``importance``
 the photons split where the camera sees the cloud and its flux is low and are rouletted deep inside
 (:func:`weight_window`, :mod:`natscene.scatter.importance`), and a share of the sky photons comes from a lobe of directions toward the camera (:meth:`natscene.scatter.photons.SkySource.toward`).
-With a ``noise_target`` a node that misses it after its budget is topped up with more photons (:func:`view_images`).
+With a ``noise_target`` a node that misses it after its budget is topped up with more photons (:func:`view_images`);
+a node can start from the photons its neighbour needed (``start``: the precompute passes each node those of the
+node one extinction thinner at the same g, :data:`START_MIN` the least).
 
 References
 ----------
@@ -65,7 +67,7 @@ from natscene.scatter.bands import SKY_BANDS, SUN_BANDS, order_distribution
 
 __all__ = ["AllOrdersSettings", "settings_from_config", "render_settings", "frame_settings", "Lighting", "Scene",
            "ViewImages", "view_images", "weight_window", "photons_for", "standard_error",
-           "budget_scale", "source_scales"]
+           "budget_scale", "source_scales", "START_MIN"]
 
 FINE_UP_TO_ORDER = 4
 
@@ -467,8 +469,14 @@ def source_scales(variances, costs, need: float, fixed: float = 0.0) -> list:
     return [float(max(xi, 1.0)) for xi in x]
 
 
+START_MIN = 0.25
+"""The least first pass of a node started from its neighbour's need (``view_images(start=...)``), as a multiple of
+the collision budget: below a quarter the two-halves noise estimate that sizes the top-up is itself too noisy
+(the main job's thin nodes meet the target at a quarter, docs/stages/precompute.md)."""
+
+
 def view_images(scene: Scene, camera, sigma: float, g: float, seed: int = 0, noise=None,
-                split=None, halves: bool = True) -> ViewImages:
+                split=None, halves: bool = True, start=None) -> ViewImages:
     """Band images of the sun's and the sky's light at (sigma, g) for ``camera`` (see the module docstring).
 
     ``noise``: a function of the :class:`ViewImages` that returns the node's relative standard error (median,
@@ -479,6 +487,9 @@ def view_images(scene: Scene, camera, sigma: float, g: float, seed: int = 0, noi
     of the pixel's variance; with it the top-up goes to the sources by :func:`source_scales` (costs: their
     collisions), without it both sources get the same factor. ``halves`` False: the images of the whole run
     (a leading axis of 1), gathered once instead of once per half; no noise figure then (``noise`` must be None).
+    ``start``: each source's first pass as a multiple of its budget (clipped to [:data:`START_MIN`,
+    ``max_budget_scale``]; None: 1), e.g. a neighbouring node's ``stats["need"]``: the multiples at which this
+    node's last estimate meets the target (its photons scaled by (error / target)², above or below 1).
     """
     st = scene.settings
     H, W = camera.height, camera.width
@@ -528,13 +539,16 @@ def view_images(scene: Scene, camera, sigma: float, g: float, seed: int = 0, noi
                           order_distribution(st.sun_bands, sun.histogram),
                           None if sky is None else order_distribution(st.sky_bands, sky.histogram), stats)
 
-    parts = run([1.0] * len(jobs), 0)
+    scales = ([1.0] * len(jobs) if start is None else
+              [float(min(max(float(x), START_MIN), st.max_budget_scale)) for x in list(start)[:len(jobs)]])
+    first = list(scales)
+    parts = run(scales, 0)
     vi = result(parts)
-    budget = [p.collisions for p in parts]              # each source's cost at its budget
-    scales = [1.0] * len(jobs)
+    budget = [p.collisions / sc for p, sc in zip(parts, scales)]    # each source's cost at its budget
     if noise is not None and max(st.noise_target) > 0:
+        figure = noise(vi)
         for round_ in (1, 2):
-            need = budget_scale(noise(vi), st.noise_target)
+            need = budget_scale(figure, st.noise_target)
             if need <= 1.0:
                 break
             need *= 1.1
@@ -550,6 +564,10 @@ def view_images(scene: Scene, camera, sigma: float, g: float, seed: int = 0, noi
             parts = [p if q is None else p.merged(q) for p, q in zip(parts, run(extra, round_))]
             scales = [sc + e for sc, e in zip(scales, extra)]
             vi = result(parts)
+            figure = noise(vi)
+        ratio = max([(float(x) / float(t)) ** 2 for x, t in zip(figure, st.noise_target) if t > 0])
+        vi.stats["need"] = [sc * ratio for sc in scales]
+        vi.stats["first_pass"] = first
         vi.stats["budget_scale"] = float(np.dot(scales, budget) / max(sum(budget), 1))
         vi.stats["source_budget_scales"] = scales
     return vi

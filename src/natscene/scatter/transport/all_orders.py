@@ -208,6 +208,10 @@ def _multiple(volume, camera, sun_dir, sigmas, gs, settings, sky, seed, log, sin
     truncated = 0.0
     scales, source_scales = [], []
     todo = [(i, j) for i in range(Ns) if sigmas[i] > 0 for j in range(Ng)]
+    # per g: the photons that the node one extinction thinner needed where it met the target with its first pass
+    # (a thin node meets it at a quarter of the budget); after a neighbour's top-up the need jumps between
+    # neighbours and a node starts at its budget (docs/stages/precompute.md, "A noise target per node")
+    need = {}
     t0 = time.perf_counter()
     for n, (i, j) in enumerate(todo):
         single_sun = hg(cos_q, gs[j]) * single["S_sun"][i]          # the pixel's order 1 over beta
@@ -217,7 +221,12 @@ def _multiple(volume, camera, sun_dir, sigmas, gs, settings, sky, seed, log, sin
 
         vi = view_images(scene, camera, float(sigmas[i]), float(gs[j]), seed=seed * 100003 + i * 101 + j,
                          noise=lambda vi: target_figure(figures(vi)),
-                         split=lambda vi: source_variances(vi, sb, kb, sky_w, foot, single_sun))
+                         split=lambda vi: source_variances(vi, sb, kb, sky_w, foot, single_sun), start=need.get(j))
+        if "need" in vi.stats and vi.stats["source_budget_scales"] == vi.stats["first_pass"]:
+            need[j] = vi.stats["need"]
+        else:
+            need.pop(j, None)
+        first = vi.stats.get("first_pass", [1.0, 1.0])
         sun_ms[:, j, i] = vi.sun
         sky_ms[:, :, j, i] = vi.sky
         sun_r[j, i], sky_r[j, i] = vi.sun_orders, vi.sky_orders
@@ -230,7 +239,8 @@ def _multiple(volume, camera, sun_dir, sigmas, gs, settings, sky, seed, log, sin
             noise[k].append(v)
         el = time.perf_counter() - t0
         log(f"all orders extinction={sigmas[i] * volume.extinction_scale:.4g}/m g={gs[j]:g}: {vi.stats.get('sun_photons', 0)} sun + "
-            f"{vi.stats.get('sky_photons', 0)} sky photons (budget x{scales[-1]:.2f}: sun x{source_scales[-1][0]:.2f}, sky x{source_scales[-1][-1]:.2f}; {n + 1}/{len(todo)}, {el:.0f} s, "
+            f"{vi.stats.get('sky_photons', 0)} sky photons (budget x{scales[-1]:.2f}: sun x{source_scales[-1][0]:.2f}, sky x{source_scales[-1][-1]:.2f}; "
+            f"first pass x{first[0]:.2f}, x{first[-1]:.2f}; {n + 1}/{len(todo)}, {el:.0f} s, "
             f"about {el / (n + 1) * (len(todo) - n - 1):.0f} s left)")
     dirs = camera.ray_directions()
     view_rgb = preetham_rgb(dirs.reshape(-1, 3), sun_dir, sky.turbidity, sky.zenith_luminance, sky.reference_elevation,
