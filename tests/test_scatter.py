@@ -272,6 +272,24 @@ def test_bad_input(tables):
         make_medium(Volume(np.zeros((4, 4, 4), np.float32), np.zeros(3), np.ones(3), 1.0))
 
 
+def test_order_one_passes_over_empty_space_exactly():
+    """Order 1's march (``march_view``) passes over empty majorant cells: the same sample points and segments, so
+    the same S_sun, S_amb, T, distance and footprint as a march that takes every step (two lumps far apart in a
+    wide box, three sigma_t, 0 among them)."""
+    from natscene.scatter.reference_scene import CAM, SUN
+    from natscene.scatter.single import march_view
+    nx, ny, nz = 72, 24, 32
+    z, y, x = np.meshgrid(np.linspace(-1, 1, nz), np.linspace(0, 1, ny), np.linspace(-1, 1, nx), indexing="ij")
+    lump = lambda cx, r: np.clip(1 - ((x - cx) ** 2 + ((y - 0.5) / 0.6) ** 2 + z ** 2) / r ** 2, 0, 1)
+    d = (lump(-0.75, 0.25) + 0.5 * lump(0.7, 0.2)).astype(np.float32)
+    med = make_medium(Volume(d, *placement((nx, ny, nz)), 80.0), SUN)
+    every = march_view(med, CAM, [0.0, 0.5, 3.0], supersample=4, skip_empty=False)
+    skipping = march_view(med, CAM, [0.0, 0.5, 3.0], supersample=4)
+    assert every["S_sun"][1].max() > 0.05 and every["footprint"].sum() > 50
+    for k in every:
+        np.testing.assert_array_equal(skipping[k], every[k], err_msg=k)
+
+
 def test_gather_passes_over_empty_space_exactly():
     """The cache gather's march passes over empty majorant cells in whole steps: the same sample points, so the
     same images as a march that takes every step (two lumps far apart in a wide box, random cache fields)."""

@@ -26,6 +26,11 @@ is exact only where it is constant along the step, not in a thick cloud's lit sk
 "Single scattering and transmittance"). Also returned: the distance to the cloud
 (first sample with rho >= ``rho_threshold``) and the footprint (the ray meets such a sample).
 
+A step in an empty cell of the volume's majorant grid adds nothing (rho = 0 there, and a = 0), so the march
+passes over the steps within the cell's safe jump (:meth:`natscene.scatter.majorant.MajorantGrid.empty_jump`):
+the same sample points, the same images. The step it lands on is within the jump, empty too, so the sun depth
+carried to its start (that of the step before the jump) meets a = 0 and is never used; its end is read afresh.
+
 References
 ----------
 -   Dobashi, Y., Iwasaki, W., Ono, A., Yamamoto, T., Yue, Y., & Nishita, T. (2012). An inverse problem approach
@@ -63,7 +68,7 @@ def sun_segment(a, x_in, x_out):
 
 
 @dr.syntax
-def _march(med: Medium, o, d, sigmas, step, rho_threshold, with_sun: bool):
+def _march(med: Medium, o, d, sigmas, step, rho_threshold, with_sun: bool, grid=None):
     k = med.scale
     t0, t1 = ray_box_dr(o, d, med.bbox_min, med.bbox_max)
     length = dr.maximum(t1 - t0, 0.0)
@@ -99,22 +104,29 @@ def _march(med: Medium, o, d, sigmas, step, rho_threshold, with_sun: bool):
         t_hit = dr.select((t_hit < 0) & (r >= rho_threshold), t0 + i * h, t_hit)
         depth += r * h
         d_in = d_out
-        i += 1.0
+        if grid is not None:  # in an empty cell every step within its safe jump adds nothing
+            i += dr.maximum(dr.floor(grid.empty_jump(p) / dr.maximum(h, 1e-30)), 1.0)
+        else:
+            i += 1.0
     return depth, t_hit, s_sun, s_amb
 
 
 def march_view(med: Medium, camera, sigmas, step_voxels: float = 0.5, supersample: int = 4,
-               rho_threshold: float = 0.01) -> dict:
+               rho_threshold: float = 0.01, skip_empty: bool = True) -> dict:
     """S_sun, S_amb, T (Ns, H, W), the distance to the cloud t_hit (H, W; NaN: no cloud) and the footprint.
 
     ``supersample``: stratified sub-pixel rays per pixel (a square); the pixel value is their mean (box
     filter). ``t_hit`` is taken at the pixel centre ray's resolution (mean of the sub-rays that hit).
+    ``skip_empty``: pass over the empty cells of the volume's majorant grid (the same images; False: every step).
     """
+    from natscene.scatter.majorant import majorant_grid
     sigmas = [float(s) for s in sigmas]
+    v = med.volume
+    grid = majorant_grid(v.density, v.bbox_min, v.bbox_max) if skip_empty else None
     W, H = camera.width, camera.height
     o, d, _ = camera_rays(camera, supersample, stratified=supersample > 1)
     depth, t_hit, s_sun, s_amb = _march(med, o, d, sigmas, med.voxel * step_voxels, float(rho_threshold),
-                                        med.sun_depth_tex is not None)
+                                        med.sun_depth_tex is not None, grid)
     T = [pixel_mean(dr.exp(-s * med.scale * depth), supersample, W, H) for s in sigmas]
     S_sun = [pixel_mean(x, supersample, W, H) for x in s_sun]
     size = float(np.max(med.bbox_max - med.bbox_min))
