@@ -198,7 +198,7 @@ def _march(med, tex, nch: int, o, d, sig_k: float, step: float, lo, cache_ext, b
                 acc[j] += q * s[j]
         trans *= 1.0 - a
         if grid is not None:  # in an empty cell every step within its safe jump adds nothing
-            i += dr.maximum(dr.floor(grid.empty_jump(p) / dr.maximum(h, 1e-30)), 1.0)
+            i += grid.empty_steps(p, h)
         else:
             i += 1.0
     return acc

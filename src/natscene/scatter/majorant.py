@@ -69,6 +69,11 @@ class MajorantGrid:
         empty = dr.gather(mi.Float, self.dr_values, flat) <= 0
         return dr.select(empty, dr.gather(mi.Float, self.dr_skip, flat), -1.0)
 
+    def empty_steps(self, p, h):
+        """Steps of length ``h`` that a march sampling at ``p`` advances: every step within ``p``'s safe jump
+        (:meth:`empty_jump`) when its cell is empty, else one."""
+        return dr.maximum(dr.floor(self.empty_jump(p) / dr.maximum(h, 1e-30)), 1.0)
+
     def occupied_bounds(self) -> tuple[np.ndarray, np.ndarray]:
         """World box of the cells with a non-zero majorant (where anything can collide)."""
         nz = np.argwhere(self.values > 0)

@@ -105,7 +105,7 @@ def _march(med: Medium, o, d, sigmas, step, rho_threshold, with_sun: bool, grid=
         depth += r * h
         d_in = d_out
         if grid is not None:  # in an empty cell every step within its safe jump adds nothing
-            i += dr.maximum(dr.floor(grid.empty_jump(p) / dr.maximum(h, 1e-30)), 1.0)
+            i += grid.empty_steps(p, h)
         else:
             i += 1.0
     return depth, t_hit, s_sun, s_amb
