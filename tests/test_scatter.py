@@ -272,17 +272,22 @@ def test_bad_input(tables):
         make_medium(Volume(np.zeros((4, 4, 4), np.float32), np.zeros(3), np.ones(3), 1.0))
 
 
+def _two_lumps() -> Volume:
+    """Two lumps far apart in a wide box (72 x 24 x 32 voxels): empty majorant cells between and around them."""
+    nx, ny, nz = 72, 24, 32
+    z, y, x = np.meshgrid(np.linspace(-1, 1, nz), np.linspace(0, 1, ny), np.linspace(-1, 1, nx), indexing="ij")
+    lump = lambda cx, r: np.clip(1 - ((x - cx) ** 2 + ((y - 0.5) / 0.6) ** 2 + z ** 2) / r ** 2, 0, 1)
+    d = (lump(-0.75, 0.25) + 0.5 * lump(0.7, 0.2)).astype(np.float32)
+    return Volume(d, *placement((nx, ny, nz)), 80.0)
+
+
 def test_order_one_passes_over_empty_space_exactly():
     """Order 1's march (``march_view``) passes over empty majorant cells: the same sample points and segments, so
     the same S_sun, S_amb, T, distance and footprint as a march that takes every step (two lumps far apart in a
     wide box, three sigma_t, 0 among them)."""
     from natscene.scatter.reference_scene import CAM, SUN
     from natscene.scatter.single import march_view
-    nx, ny, nz = 72, 24, 32
-    z, y, x = np.meshgrid(np.linspace(-1, 1, nz), np.linspace(0, 1, ny), np.linspace(-1, 1, nx), indexing="ij")
-    lump = lambda cx, r: np.clip(1 - ((x - cx) ** 2 + ((y - 0.5) / 0.6) ** 2 + z ** 2) / r ** 2, 0, 1)
-    d = (lump(-0.75, 0.25) + 0.5 * lump(0.7, 0.2)).astype(np.float32)
-    med = make_medium(Volume(d, *placement((nx, ny, nz)), 80.0), SUN)
+    med = make_medium(_two_lumps(), SUN)
     every = march_view(med, CAM, [0.0, 0.5, 3.0], supersample=4, skip_empty=False)
     skipping = march_view(med, CAM, [0.0, 0.5, 3.0], supersample=4)
     assert every["S_sun"][1].max() > 0.05 and every["footprint"].sum() > 50
@@ -296,11 +301,9 @@ def test_gather_passes_over_empty_space_exactly():
     from natscene.scatter.inscatter import gather
     from natscene.scatter.majorant import majorant_grid
     from natscene.scatter.reference_scene import CAM, SUN
-    nx, ny, nz = 72, 24, 32
-    z, y, x = np.meshgrid(np.linspace(-1, 1, nz), np.linspace(0, 1, ny), np.linspace(-1, 1, nx), indexing="ij")
-    lump = lambda cx, r: np.clip(1 - ((x - cx) ** 2 + ((y - 0.5) / 0.6) ** 2 + z ** 2) / r ** 2, 0, 1)
-    d = (lump(-0.75, 0.25) + 0.5 * lump(0.7, 0.2)).astype(np.float32)
-    vol = Volume(d, *placement((nx, ny, nz)), 80.0)
+    vol = _two_lumps()
+    d = vol.density
+    nz, ny, nx = d.shape
     med = make_medium(vol, SUN)
     grid = majorant_grid(d, vol.bbox_min, vol.bbox_max, 4)
     assert (np.asarray(grid.dr_skip) > 0).any()
