@@ -107,3 +107,18 @@ def test_halves_are_independent_and_every_point_is_counted():
     total = c[:, 0] + c[:, 3] * L                             # (2 halves, cells): the dome's R is L
     assert abs(total.mean() / L - 1) <= 0.01
     assert not np.allclose(total[0], total[1])
+
+
+def test_numerators_do_not_depend_on_the_chunk_size():
+    """The sums over the points run in chunks (to bound the temporaries): chunks of 1000 points, which split
+    cells, give the numerators of one chunk holding every point, to float64 rounding."""
+    vol = _box(2.0)
+    med = make_medium(vol)
+    cam = np.array([0.5, 0.6, -3.0])
+    s = shadow_samples(med, voxel_camera_depth(med, cam), cam, SkySource(uniform_dome(L), np.zeros(3), np.ones(3)),
+                       [0.0, 0.85], 1, per_cell=48, seed=2)
+    q = np.ones((N, N, N))
+    whole = first_order_numerators(s, 2.0, 0.85, q, chunk=s.index.size)
+    parts = first_order_numerators(s, 2.0, 0.85, q, chunk=1000)
+    assert s.index.size > 10 * 1000 and whole.max() > 0
+    np.testing.assert_allclose(parts, whole, rtol=1e-12, atol=1e-15 * whole.max())

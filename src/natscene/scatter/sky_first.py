@@ -211,21 +211,26 @@ def shadow_samples(med, depth_vox: np.ndarray, camera_position, sky, gs, factor:
     return ShadowSamples(cells=(cz, cy, cx), **cat)
 
 
-def first_order_numerators(samples: ShadowSamples, sig_k: float, g: float, weighted_integrals: np.ndarray
-                           ) -> np.ndarray:
+def first_order_numerators(samples: ShadowSamples, sig_k: float, g: float, weighted_integrals: np.ndarray,
+                           chunk: int = 1 << 20) -> np.ndarray:
     """(2 halves, 4 channels, cz, cy, cx) float64: C_1 = S_1 Q per cell for one node (``sig_k`` = sigma_t k per
     unit density, ``g``), S_1 the ratio Σ w rho S / Σ w rho over each half's points of the cell and Q =
-    ``weighted_integrals`` (∫_cell w sigma_t dV, :meth:`natscene.scatter.allorders.Scene.weighted_integrals`)."""
+    ``weighted_integrals`` (∫_cell w sigma_t dV, :meth:`natscene.scatter.allorders.Scene.weighted_integrals`).
+    The sums run over ``chunk`` points at a time, so that the float64 temporaries stay a few tens of MB whatever
+    the number of points."""
     cz, cy, cx = samples.cells
     n = cz * cy * cx
-    wr = samples.rho.astype(np.float64) * np.exp(-sig_k * samples.depth_camera.astype(np.float64))
-    val = (wr * np.exp(-sig_k * samples.depth_light.astype(np.float64)) * hg(samples.cos_camera, g)
-           * samples.inv_q.astype(np.float64))
-    den = np.bincount(samples.index, wr, minlength=2 * n)
-    ok = den > 0
-    out = np.zeros((4, 2 * n))
-    for ch in range(4):
-        num = np.bincount(samples.index, val * samples.radiance[ch].astype(np.float64), minlength=2 * n)
-        out[ch] = np.divide(num, den, out=np.zeros(2 * n), where=ok)
+    den = np.zeros(2 * n)
+    num = np.zeros((4, 2 * n))
+    for a in range(0, samples.index.size, chunk):
+        part = slice(a, a + chunk)
+        idx = samples.index[part]
+        wr = samples.rho[part].astype(np.float64) * np.exp(-sig_k * samples.depth_camera[part].astype(np.float64))
+        val = (wr * np.exp(-sig_k * samples.depth_light[part].astype(np.float64)) * hg(samples.cos_camera[part], g)
+               * samples.inv_q[part].astype(np.float64))
+        den += np.bincount(idx, wr, minlength=2 * n)
+        for ch in range(4):
+            num[ch] += np.bincount(idx, val * samples.radiance[ch, part].astype(np.float64), minlength=2 * n)
+    out = np.divide(num, den, out=np.zeros_like(num), where=den > 0)
     q = np.asarray(weighted_integrals, np.float64).ravel()
     return (out.reshape(4, 2, n) * q).transpose(1, 0, 2).reshape(2, 4, cz, cy, cx)
