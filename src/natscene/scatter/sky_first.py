@@ -138,12 +138,13 @@ def _hg_directions(axis: np.ndarray, g: np.ndarray, rng) -> np.ndarray:
     return (sin_t * np.cos(phi))[:, None] * t + (sin_t * np.sin(phi))[:, None] * b + cos_t[:, None] * axis
 
 
-def shadow_samples(med, depth_vox: np.ndarray, camera_position, sky, gs, factor: int, per_cell: int = 128,
+def shadow_samples(med, depth_vox: np.ndarray, camera_position, sky, gs, factor: int, per_cell: int,
                    seed: int = 0, step_voxels: float = 1.0, max_camera_depth: float = np.inf,
                    chunk: int = 1 << 20) -> ShadowSamples:
-    """``per_cell`` points (a multiple of 16: 2 x 2 x 2 strata, each with a point of either half) in every occupied
-    cell of ``factor`` voxels, each with a direction of travel ω from the mixture q of the equal mixture of HG(g)
-    lobes around the direction to the camera over ``gs`` and, a share :data:`DOME_SHARE`, the dome's luminance as
+    """``per_cell`` points (the setting ``precompute.all_orders.sky_order1_points``; a multiple of 16: 2 x 2 x 2
+    strata, each with a point of either half) in every occupied cell of ``factor`` voxels, each with a direction of
+    travel ω from the mixture q of the equal mixture of HG(g) lobes around the direction to the camera over ``gs``
+    and, a share :data:`DOME_SHARE`, the dome's luminance as
     the sky photons draw it (``sky``: the :class:`natscene.scatter.photons.SkySource`, its ground share too), the
     optical depth back toward the source marched with ``step_voxels``
     steps (midpoint rule on the trilinear density, to the box), and the camera depth ``depth_vox``
