@@ -215,6 +215,14 @@ def test_declared_memory_grows_with_the_inputs(smoke):
     cfg["views"]["tiny"]["resolution"] = [1920, 1080]
     p_big, _ = estimate_mem_mb("precompute", cfg, {"volume": "tiny", "view": "tiny"}, ROOT)
     assert p_big > p_small
+    # the sky's order-1 shadow rays: their points a cell, in cells of fine_voxels
+    assert smoke["precompute"]["transport"] == "all_orders"
+    cfg["precompute"]["all_orders"]["sky_order1_points"] = 0
+    p_none, _ = estimate_mem_mb("precompute", cfg, {"volume": "tiny", "view": "tiny"}, ROOT)
+    cfg["precompute"]["all_orders"]["sky_order1_points"] = 256
+    cfg["precompute"]["all_orders"]["fine_voxels"] = 1
+    p_fine, _ = estimate_mem_mb("precompute", cfg, {"volume": "tiny", "view": "tiny"}, ROOT)
+    assert p_fine > p_big > p_none
 
 
 def test_job_too_big_is_refused_with_estimate_and_key(smoke, monkeypatch):

@@ -76,9 +76,14 @@ MODEL: dict[str, dict[str, float]] = {  # bytes per unit / MB; n = measured jobs
     "pigment_maps": {"base": 165.6, "pixels": 725.4 / MB},  # n=4, max residual 4.0 MB
     "point_scatter": {"base": 227.1, "voxels": 67.19 / MB},  # n=8, max residual 4.6 MB
     # all-orders transport: one main-job run (cumulus 160x112x160, 320x240, 7 extinctions x 5 g, 8 + 4x3 bands):
-    # 1655 MB peak, 55.9 M table values -> 22.5 bytes per value over base and voxels; with the noise target's
-    # top-ups (up to 8x the photons) 1777 MB peak of the declared 2200 (fresh-clone run of 726a883)
-    "precompute_all_orders": {"base": 365.9, "table_values": 22.5 / MB, "voxels": 12.15 / MB},  # n=1
+    # 1655 MB peak, 55.9 M table values -> 22.5 bytes per value over base and voxels. The sky's order-1 shadow
+    # rays (natscene.scatter.sky_first.shadow_samples) hold 26.7 bytes a point for the whole run, in the cloud's
+    # occupied cells only, which are not known before the volume is made: the feature is the bound (every fine
+    # cell of the grid x sky_order1_points) and the coefficient 26.7 bytes x the main job's occupancy (43 k of
+    # 358 k cells, 12 %). Main job (8 x 5 nodes, 82.3 M table values, 256 points a cell): 2444 MB modelled,
+    # 2545 MB peak in a fresh-clone run
+    "precompute_all_orders": {"base": 365.9, "table_values": 22.5 / MB, "voxels": 12.15 / MB,
+                              "shadow_point_bound": 3.2 / MB},  # n=2
     "precompute": {"base": 365.9, "paths": 353.6 / MB, "pixels": 0 / MB, "table_values": 0 / MB, "voxels": 12.15 / MB},  # n=5, max residual 145.3 MB
     "recolour": {"base": 288.7, "pixels": 452.4 / MB},  # n=3, max residual 0.5 MB
     "render_frame": {"base": 467.5, "paths": 0 / MB, "pixels": 1323 / MB, "voxels": 44.89 / MB},  # n=8, max residual 85.4 MB
@@ -157,6 +162,14 @@ def _paths_per_pass(pixels: int, spp: int, batch_spp=None) -> int:
     return pixels * max(1, min(int(spp), 2_000_000 // max(pixels, 1)))
 
 
+def _shadow_point_bound(config: dict, voxels: int) -> int:
+    """The grid's fine cache cells (``voxels`` / ``precompute.all_orders.fine_voxels``³) x
+    ``precompute.all_orders.sky_order1_points``: the most shadow-ray points the precompute can hold (it places
+    them in the cloud's occupied cells only, :func:`natscene.scatter.sky_first.shadow_samples`)."""
+    ao = config["precompute"]["all_orders"]
+    return -(-int(voxels) // int(ao["fine_voxels"]) ** 3) * int(ao["sky_order1_points"])
+
+
 def _pixels(res) -> int:
     return int(res[0]) * int(res[1])
 
@@ -233,6 +246,9 @@ def job_features(rule: str, config: dict, wildcards: dict, root) -> tuple[str, d
         feats["table_values"], keys["table_values"] = _table_values(config, p), f"views.{wc['view']}.resolution"
         pre = config["precompute"]
         model = _transport(pre["transport"]).memory_model(rule)
+        if "shadow_point_bound" in MODEL[model]:
+            feats["shadow_point_bound"] = _shadow_point_bound(config, feats["voxels"])
+            keys["shadow_point_bound"] = "precompute.all_orders.sky_order1_points"
         if "paths" in MODEL[model]:
             feats["paths"] = _paths_per_pass(p, pre["spp"], pre["batch_spp"])
             keys["paths"] = "precompute.batch_spp"
