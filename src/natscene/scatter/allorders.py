@@ -471,7 +471,8 @@ def source_scales(variances, costs, need: float, fixed: float = 0.0) -> list:
 
 START_MIN = 0.25
 """The least first pass of a node started from its neighbour's need (``view_images(start=...)``), as a multiple of
-the collision budget. The main job's thin nodes meet the target at a quarter; a smaller first pass leaves the
+the collision budget, and the first pass of the precompute's thinnest extinction, which has no thinner neighbour.
+The main job's thin nodes meet the target at a quarter; a smaller first pass leaves the
 top-up to an estimate from fewer photons, which over-asks (a thick node's sun started at 0.36x was topped up to
 3.6x where 1.7x sufficed; docs/stages/precompute.md, "A noise target per node")."""
 

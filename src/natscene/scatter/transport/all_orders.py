@@ -181,7 +181,7 @@ def _multiple(volume, camera, sun_dir, sigmas, gs, settings, sky, seed, log, sin
     """Band images of the sun's and the sky's light over the (g, extinction) grid, their order distributions and
     noise (``sigmas``: the volume's unitless sigma_t of each node; ``single``: the precompute's
     :func:`natscene.scatter.single.march_view` of the grid)."""
-    from natscene.scatter.allorders import Lighting, Scene, view_images
+    from natscene.scatter.allorders import START_MIN, Lighting, Scene, view_images
     from natscene.scatter.skylight import irradiance
     from natscene.sky.daylight import preetham_rgb, skylight
     sky = skylight(sky, "precompute.skylight")
@@ -211,7 +211,10 @@ def _multiple(volume, camera, sun_dir, sigmas, gs, settings, sky, seed, log, sin
     # per g: the photons that the node one extinction thinner needed where it met the target with its first pass
     # (a thin node meets it at a quarter of the budget); after a neighbour's top-up the need jumps between
     # neighbours and a node starts at its budget (docs/stages/precompute.md, "A noise target per node")
+    # The thinnest extinction has no thinner neighbour: its nodes start at START_MIN and are topped up by what
+    # that pass measures (the main job's thin nodes meet the target there)
     need = {}
+    thinnest = todo[0][0] if todo else None
     t0 = time.perf_counter()
     for n, (i, j) in enumerate(todo):
         single_sun = hg(cos_q, gs[j]) * single["S_sun"][i]          # the pixel's order 1 over beta
@@ -221,7 +224,8 @@ def _multiple(volume, camera, sun_dir, sigmas, gs, settings, sky, seed, log, sin
 
         vi = view_images(scene, camera, float(sigmas[i]), float(gs[j]), seed=seed * 100003 + i * 101 + j,
                          noise=lambda vi: target_figure(figures(vi)),
-                         split=lambda vi: source_variances(vi, sb, kb, sky_w, foot, single_sun), start=need.get(j))
+                         split=lambda vi: source_variances(vi, sb, kb, sky_w, foot, single_sun),
+                         start=need.get(j, (START_MIN, START_MIN) if i == thinnest else None))
         if "need" in vi.stats and vi.stats["source_budget_scales"] == vi.stats["first_pass"]:
             need[j] = vi.stats["need"]
         else:
