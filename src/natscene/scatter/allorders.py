@@ -490,7 +490,7 @@ def view_images(scene: Scene, camera, sigma: float, g: float, seed: int = 0, noi
     collisions), without it both sources get the same factor. ``halves`` False: the images of the whole run
     (a leading axis of 1), gathered once instead of once per half; no noise figure then (``noise`` must be None).
     ``start``: each source's first pass as a multiple of its budget (clipped to [:data:`START_MIN`,
-    ``max_budget_scale``]; None: 1), e.g. a neighbouring node's ``stats["need"]``: the multiples at which this
+    ``max_budget_scale``], to [1, ``max_budget_scale``] without a noise target; None: 1), e.g. a neighbouring node's ``stats["need"]``: the multiples at which this
     node's last estimate meets the target (its photons scaled by (error / target)², above or below 1).
     """
     st = scene.settings
@@ -541,13 +541,15 @@ def view_images(scene: Scene, camera, sigma: float, g: float, seed: int = 0, noi
                           order_distribution(st.sun_bands, sun.histogram),
                           None if sky is None else order_distribution(st.sky_bands, sky.histogram), stats)
 
+    targeted = noise is not None and max(st.noise_target) > 0
+    least = START_MIN if targeted else 1.0         # nothing tops a short first pass up without a noise target
     scales = ([1.0] * len(jobs) if start is None else
-              [float(min(max(float(x), START_MIN), st.max_budget_scale)) for x in list(start)[:len(jobs)]])
+              [float(min(max(float(x), least), st.max_budget_scale)) for x in list(start)[:len(jobs)]])
     first = list(scales)
     parts = run(scales, 0)
     vi = result(parts)
     budget = [p.collisions / sc for p, sc in zip(parts, scales)]    # each source's cost at its budget
-    if noise is not None and max(st.noise_target) > 0:
+    if targeted:
         figure = noise(vi)
         for round_ in (1, 2):
             need = budget_scale(figure, st.noise_target)

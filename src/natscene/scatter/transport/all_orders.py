@@ -211,10 +211,10 @@ def _multiple(volume, camera, sun_dir, sigmas, gs, settings, sky, seed, log, sin
     # per g: the photons that the node one extinction thinner needed where it met the target with its first pass
     # (a thin node meets it at a quarter of the budget); after a neighbour's top-up the need jumps between
     # neighbours and a node starts at its budget (docs/stages/precompute.md, "A noise target per node")
-    # The thinnest extinction has no thinner neighbour: with a noise target its nodes start at START_MIN and are
-    # topped up by what that pass measures (the main job's thin nodes meet the target there)
+    # The thinnest extinction has no thinner neighbour: its nodes start at START_MIN and are topped up by what that
+    # pass measures (the main job's thin nodes meet the target there; without a target view_images starts at 1)
     need = {}
-    thinnest = todo[0][0] if todo and max(settings.noise_target) > 0 else None
+    thinnest = todo[0][0] if todo else None
     t0 = time.perf_counter()
     for n, (i, j) in enumerate(todo):
         single_sun = hg(cos_q, gs[j]) * single["S_sun"][i]          # the pixel's order 1 over beta
