@@ -15,9 +15,24 @@ and the node's seconds and photons:
     .venv/bin/python experiments/noise_split/run.py 0.005,0.9 0.02,0.9 --lobes 0.7,0.2 0.9,0.2 0.9,0.5
     .venv/bin/python experiments/noise_split/run.py 0.005,0.9 --sky-order1-points 0   # the sky photons' order 1
 
-Written to results/experiments/noise_split.json. ``lobe_per_point.patch`` (``git apply`` it) is the sky lobe per
-starting point that docs/stages/precompute.md ("Effort per source") measured and did not keep: the lobe of each
-sky photon around the line from its starting point on the box's far faces to the camera.
+``--settings`` takes variants of the ``precompute.all_orders`` keys as JSON (each with every lobe), ``--seeds``
+repeats each run:
+
+    .venv/bin/python experiments/noise_split/run.py 0.15,0.75 0.3,0.85 --seeds 1 2 \
+        --settings '{}' '{"importance_floor": 0.02}'
+
+Written to results/experiments/noise_split.json. Three routes that docs/stages/precompute.md measured and did not
+keep are patches here (``git apply`` one, run, ``git apply -R`` it):
+
+- ``lobe_per_point.patch`` ("Effort per source"): the lobe of each sky photon around the line from its starting
+  point on the box's far faces to the camera;
+- ``sky_entry_faces.patch`` ("Thick clouds: routes measured"): the sky photons' start points on the box's faces
+  drawn by each face texel's importance (what a beam entering there along the inward normal scatters where the
+  camera sees it), a share ``SKY_ENTRY`` (environment, e.g. 0.9) of it;
+- ``sky_first_collisions.patch`` (the same section): a share ``SKY_FIRST`` of the sky photons starting at their
+  first collision in the cells the camera sees (mean visibility at least ``SKY_FIRST_VIS``, default 0.01; a cell
+  by its visible extinction, a point uniform in it, a dome direction and a shadow ray), the others ending where
+  their first collision falls in those cells.
 """
 import argparse
 import json
@@ -56,6 +71,8 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("nodes", nargs="+", help="extinction,g (1/m, HG g)")
     ap.add_argument("--lobes", nargs="+", default=["0.7,0.2"], help="sky lobe g,share")
+    ap.add_argument("--settings", nargs="+", default=["{}"], help="JSON objects of precompute.all_orders keys")
+    ap.add_argument("--seeds", nargs="+", type=int, default=[5], help="a run per seed")
     ap.add_argument("--sky-order1-points", type=int, default=None,
                     help="precompute.all_orders.sky_order1_points (default: the config's; 0: the sky photons' order 1)")
     a = ap.parse_args()
@@ -79,11 +96,13 @@ def main():
                             rho_threshold=pre["rho_threshold"])
         foot = single["footprint"] > 0
         single_sun = BETA * hg(cos_q, g) * single["S_sun"][0]
-        for lobe in a.lobes:
+        for lobe, over, seed in ((lb, ov, sd) for lb in a.lobes for ov in a.settings for sd in a.seeds):
             lg, share = (float(x) for x in lobe.split(","))
-            st = replace(st0, sky_lobe_g=lg, sky_lobe_share=share)
+            over = json.loads(over)
+            st = replace(st0, sky_lobe_g=lg, sky_lobe_share=share,
+                         **{k: tuple(v) if isinstance(v, list) else v for k, v in over.items()})
             t0 = time.perf_counter()
-            vi = view_images(Scene(volume, Lighting(s_dir, dome), st), camera, sigma, g, seed=5)
+            vi = view_images(Scene(volume, Lighting(s_dir, dome), st, shadow_seed=seed), camera, sigma, g, seed=seed)
             secs = time.perf_counter() - t0
             ps = parts(vi, st, sky_w)
             pixel = single_sun + sum((h[0] + h[1]) / 2 for h in ps.values())
@@ -98,9 +117,11 @@ def main():
             tot = sum(var.values())
             for name in ps:
                 row[name]["variance_share"] = round(var[name] / tot, 3)
+                row[name]["variance"] = float(f"{var[name]:.4g}")
             row["single_share_of_pixel"] = round(float(single_sun[ok].sum() / pixel[ok].sum()), 3)
-            out[f"{e:g}/m g {g:g} lobe {lg:g},{share:g}"] = row
-            print(f"{e:g}/m g {g:g} lobe {lg:g},{share:g}:", json.dumps(row), flush=True)
+            key = f"{e:g}/m g {g:g} lobe {lg:g},{share:g} {json.dumps(over)} seed {seed}"
+            out[key] = row
+            print(f"{key}:", json.dumps(row), flush=True)
     dest = ROOT / "results/experiments/noise_split.json"
     dest.parent.mkdir(parents=True, exist_ok=True)
     dest.write_text(json.dumps(out, indent=1))
