@@ -15,6 +15,10 @@ its parameters, the sun at azimuth 120 and elevation 30, 640x480) is rendered wi
 
 With noise figures N_0 (the defaults), N_sun (the sun's collisions doubled) and N_sky (the sky's doubled), the
 sun's share of the variance at the defaults is 2 (N_0² - N_sun²) / N_0² and the sky's 2 (N_0² - N_sky²) / N_0².
+``--all-orders JSON`` sets transport settings that a shot's ``render:`` section does not hold (the fields of
+:class:`natscene.scatter.allorders.AllOrdersSettings`, e.g. ``'{"importance_floor": 0.02}'``) on top of the frame's
+(:func:`natscene.scatter.allorders.frame_settings`), for every set of overrides.
+
 Written to results/experiments/frame_budget.json.
 """
 import argparse
@@ -41,7 +45,15 @@ def main():
     ap.add_argument("overrides", nargs="+", help="JSON objects of shots.day_to_sunset.render keys")
     ap.add_argument("--extinction", type=float, default=0.0243, help="the cloud's extinction, 1/m")
     ap.add_argument("--results", default=str(ROOT / "results"))
+    ap.add_argument("--all-orders", default="{}", help="JSON of AllOrdersSettings fields set on every frame")
     a = ap.parse_args()
+    extra = json.loads(a.all_orders)
+    if extra:      # the frames' settings come from frame_settings(render): set these fields on what it returns
+        from dataclasses import replace
+
+        import natscene.scatter.allorders as allorders
+        plain = allorders.frame_settings
+        allorders.frame_settings = lambda render: replace(plain(render), **extra)
     select_variant(threads=2)
     cfg = load_yaml_config(ROOT / "config" / "config.yaml")
     validate_config(cfg, ROOT / "workflow" / "schemas" / "config.schema.yaml")
@@ -75,7 +87,7 @@ def main():
         rows.append(row)
     out = Path(a.results) / "experiments" / "frame_budget.json"
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(json.dumps({"extinction_per_m": a.extinction, "rows": rows}, indent=1) + "\n")
+    out.write_text(json.dumps({"extinction_per_m": a.extinction, "all_orders": extra, "rows": rows}, indent=1) + "\n")
     print(f"wrote {out}")
 
 
