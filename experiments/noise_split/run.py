@@ -72,7 +72,8 @@ def main():
     ap.add_argument("nodes", nargs="+", help="extinction,g (1/m, HG g)")
     ap.add_argument("--lobes", nargs="+", default=["0.7,0.2"], help="sky lobe g,share")
     ap.add_argument("--settings", nargs="+", default=["{}"], help="JSON objects of precompute.all_orders keys")
-    ap.add_argument("--seeds", nargs="+", type=int, default=[5], help="a run per seed")
+    ap.add_argument("--seeds", nargs="+", type=int, default=None,
+                    help="a run per seed, its shadow rays too (default: one run, seed 5, the shadow rays' seed 0)")
     ap.add_argument("--sky-order1-points", type=int, default=None,
                     help="precompute.all_orders.sky_order1_points (default: the config's; 0: the sky photons' order 1)")
     a = ap.parse_args()
@@ -96,13 +97,14 @@ def main():
                             rho_threshold=pre["rho_threshold"])
         foot = single["footprint"] > 0
         single_sun = BETA * hg(cos_q, g) * single["S_sun"][0]
-        for lobe, over, seed in ((lb, ov, sd) for lb in a.lobes for ov in a.settings for sd in a.seeds):
+        for lobe, over, seed in ((lb, ov, sd) for lb in a.lobes for ov in a.settings for sd in a.seeds or [None]):
             lg, share = (float(x) for x in lobe.split(","))
             over = json.loads(over)
             st = replace(st0, sky_lobe_g=lg, sky_lobe_share=share,
                          **{k: tuple(v) if isinstance(v, list) else v for k, v in over.items()})
             t0 = time.perf_counter()
-            vi = view_images(Scene(volume, Lighting(s_dir, dome), st, shadow_seed=seed), camera, sigma, g, seed=seed)
+            scene = Scene(volume, Lighting(s_dir, dome), st, shadow_seed=0 if seed is None else seed)
+            vi = view_images(scene, camera, sigma, g, seed=5 if seed is None else seed)
             secs = time.perf_counter() - t0
             ps = parts(vi, st, sky_w)
             pixel = single_sun + sum((h[0] + h[1]) / 2 for h in ps.values())
@@ -119,7 +121,8 @@ def main():
                 row[name]["variance_share"] = round(var[name] / tot, 3)
                 row[name]["variance"] = float(f"{var[name]:.4g}")
             row["single_share_of_pixel"] = round(float(single_sun[ok].sum() / pixel[ok].sum()), 3)
-            key = f"{e:g}/m g {g:g} lobe {lg:g},{share:g} {json.dumps(over)} seed {seed}"
+            key = f"{e:g}/m g {g:g} lobe {lg:g},{share:g}" + (f" {json.dumps(over)}" if over else "") + (
+                f" seed {seed}" if seed is not None else "")
             out[key] = row
             print(f"{key}:", json.dumps(row), flush=True)
     dest = ROOT / "results/experiments/noise_split.json"
