@@ -89,6 +89,7 @@ class AllOrdersSettings:
     guide_width: tuple                    # optical depth, fine and coarse cache (0: no smoothing)
     max_order: int
     similarity_order: int                 # high orders by similarity from this order on (0: every order exact)
+    p1_order: int                         # the tallies' phase function in its P1 part from this order on (0: HG)
     tally_rate: float                     # tally samples per voxel length at least, along every flight in cloud
     sun_bands: tuple = SUN_BANDS
     sky_bands: tuple = SKY_BANDS
@@ -364,7 +365,7 @@ def _trace_halves(scene: Scene, source, sigma: float, g: float, camera, n_photon
                   caches=_caches(scene, bands), seed=seed * 2 + h, max_order=scene.settings.max_order, k_min=k_min,
                   camera_depth=camera_depth, tally_rate=scene.settings.tally_rate, window=window,
                   split_max=scene.settings.split_max, camera_lobe=scene.settings.camera_lobe,
-                  similarity_order=scene.settings.similarity_order)
+                  similarity_order=scene.settings.similarity_order, p1_order=scene.settings.p1_order)
             for h in range(2)]
 
 

@@ -347,6 +347,7 @@ class _Walk:
     window: object
     split_max: int
     similarity: object    # None, or (first order, 1 - g, log g): high-order similarity (:func:`_walk`)
+    p1: object = None     # None, or (first order, per cache the numerators' size): P1 tallies (:func:`_walk`)
 
 
 @dr.syntax
@@ -375,7 +376,13 @@ def _walk(s: _Walk, rec_p, rec_w, rec_wts, rec_mult, rec_k, rec_vis, rec_state, 
     K ~ Geometric(1 - g) real ones (k += K: E[beta^K] = beta (1 - g) / (1 - beta g) is the similar albedo, so the
     closed-form albedo of the bands holds), and its tallies count the real mu_t = mu_t* / (1 - g) with the real
     phase function toward the camera along the flight's direction (the similar field keeps the fluence and the
-    flux). A walk of n real collisions then costs about n (1 - g) events."""
+    flux). A walk of n real collisions then costs about n (1 - g) events.
+
+    P1 tallies (``s.p1``, from order ``p1_order`` on): the tallied phase function toward the camera is HG's
+    first two Legendre terms, (1 + 3 g ω · ω_cam) / 4π, instead of HG itself. Where the light has diffused (high
+    orders) its radiance is nearly linear in direction, the terms of HG past the first do not see it, and the
+    tally's range shrinks from HG's forward peak (98 / 4π at g 0.9) to 1 + 3g; a negative tally (ω away from the
+    camera, g > 1/3) goes to a second half of the numerators, subtracted at the end."""
     nch = len(rec_wts)
     lane = dr.arange(mi.UInt32, lanes)
     rec = mi.UInt32(lane)
@@ -437,11 +444,19 @@ def _walk(s: _Walk, rec_p, rec_w, rec_wts, rec_mult, rec_k, rec_vis, rec_state, 
         if s.similarity is not None:  # a similar flight: the real mu_t is boost x the similar one
             light = light * boost
         val = ratio * (light if s.phase else vis_x * boost)
+        if s.p1 is not None:      # the diffuse orders: the phase function's P1 part, (1 + 3 g cos) / 4 pi
+            p1 = vis_x * (1.0 + 3.0 * s.g * dr.dot(w, dr.normalize(s.cam - x))) * (1.0 / (4.0 * math.pi))
+            if s.similarity is not None:
+                p1 = p1 * boost
+            val = dr.select(kk >= s.p1[0], ratio * p1, val)
         for ci, (factor, dims, ncell) in enumerate(s.caches):
             slot = dr.gather(mi.Int32, s.slot_tabs[ci], kk)
             idx = mi.UInt32(dr.maximum(slot, 0)) * ncell + _cache_index(x, s.lo, s.ext, s.res, factor, dims)
+            if s.p1 is not None:  # a negative tally goes to the second half of the (doubled) numerators
+                idx = dr.select(val < 0, idx + s.p1[1][ci], idx)
             for c in range(nch):
-                dr.scatter_reduce(dr.ReduceOp.Add, s.accs[ci][c], _fixed(val * wts[c]), idx, inside & (slot >= 0))
+                dr.scatter_reduce(dr.ReduceOp.Add, s.accs[ci][c], _fixed(dr.abs(val * wts[c])), idx,
+                                  inside & (slot >= 0))
         flying = flying & ~accept & ~escaped
         # a real collision: order k, the histogram, the end of the walk at max_order, the weight window
         p = dr.select(accept, x, p)
@@ -535,7 +550,8 @@ def _copies(spawn: dict, spawned, lanes: int, cap: int, seed: int, stream: int):
 def trace(med, grid: MajorantGrid, source, sigma: float, g: float, camera_position, n_photons: int, bands,
           caches=((2, None),), seed: int = 0, max_order: int = 4096, k_min: int = 2, batch: int = 2 ** 18,
           progress=None, camera_depth=None, tally_rate: float = 0.0, phase: bool = True,
-          window=None, split_max: int = 8, camera_lobe: float = 0.0, similarity_order: int = 0) -> InscatterTally:
+          window=None, split_max: int = 8, camera_lobe: float = 0.0, similarity_order: int = 0,
+          p1_order: int = 0) -> InscatterTally:
     """Trace ``n_photons`` from ``source`` through the medium at (sigma, g) and tally the in-scatter caches.
 
     ``caches``: (factor, band indices or None = all bands) per cache; every band goes to exactly one cache.
@@ -550,6 +566,7 @@ def trace(med, grid: MajorantGrid, source, sigma: float, g: float, camera_positi
     against this weight window (:func:`_walk`, :mod:`natscene.scatter.importance`).
     ``similarity_order`` > 0 (and g > 0.05): from that order on the photon flies in the similar medium of
     high-order similarity (:func:`_walk`).
+    ``p1_order`` > 0: from that order on the tallies take the phase function's P1 part (:func:`_walk`).
 
     The source's photons are walked by :func:`_walk` in one pass per ``batch`` photons; the copies that pass
     splits off are walked in the next, and so on until no copy is left (2^18 photons a batch keep a main-job node
@@ -594,6 +611,10 @@ def trace(med, grid: MajorantGrid, source, sigma: float, g: float, camera_positi
                for ci in range(len(caches))],
               dr.zeros(mi.UInt64, max_order + 1), dr.zeros(mi.UInt64, 1), int(max_order), int(k_min), bool(phase),
               window, int(split_max), None)
+    if p1_order > 0 and phase:
+        sizes = [max(1, geo[ci][2] * len(band_sets[ci])) for ci in range(len(caches))]
+        s.p1 = (dr.opaque(mi.UInt32, int(p1_order)), sizes)
+        s.accs = [[dr.zeros(mi.UInt64, 2 * sizes[ci]) for _ in range(nch)] for ci in range(len(caches))]
     if similarity_order > 0 and g > 0.05:
         s.similarity = (dr.opaque(mi.UInt32, int(similarity_order)), dr.opaque(mi.Float, 1.0 - float(g)),
                         dr.opaque(mi.Float, math.log(float(g))))
@@ -634,8 +655,11 @@ def trace(med, grid: MajorantGrid, source, sigma: float, g: float, camera_positi
         if progress:
             progress(done, n_photons)
     scale = (unit or 0.0) / FIXED
-    nums = [np.stack([(np.asarray(a, np.float64)[:geo[ci][2] * len(band_sets[ci])] * scale)
-                      .reshape(len(band_sets[ci]), geo[ci][1][2], geo[ci][1][1], geo[ci][1][0]) for a in s.accs[ci]])
+    accs = [[np.asarray(a, np.float64) for a in acc] for acc in s.accs]
+    if s.p1 is not None:          # the positive tallies less the negative ones
+        accs = [[a[:n] - a[n:] for a in acc] for acc, n in zip(accs, s.p1[1])]
+    nums = [np.stack([(a[:geo[ci][2] * len(band_sets[ci])] * scale)
+                      .reshape(len(band_sets[ci]), geo[ci][1][2], geo[ci][1][1], geo[ci][1][0]) for a in accs[ci]])
             for ci in range(len(caches))]
     h = np.asarray(s.hist, np.float64) * scale
     tot_light = h.sum()
