@@ -6,6 +6,7 @@ Defines the Henyey–Greenstein phase function, normalised over the sphere (Doba
 
 -   :func:`hg`: the phase function on numpy arrays; :data:`INV_4PI`: the isotropic value 1/(4π).
 -   :func:`hg_dr`: the phase function on Dr.Jit arrays.
+-   :func:`hg_p1_dr`: its first two Legendre terms, (1 + 3 g cos θ) / 4π, on Dr.Jit arrays.
 -   :func:`hg_sample_cos`, :func:`hg_sample_cos_dr`: cos θ sampled from HG(g) (numpy, Dr.Jit).
 
 p(cos θ, g) = (1 - g²) / (4π (1 + g² - 2 g cos θ)^{3/2}), θ the angle between the propagation directions
@@ -29,7 +30,7 @@ import math
 
 import numpy as np
 
-__all__ = ["hg", "hg_dr", "hg_sample_cos", "hg_sample_cos_dr", "INV_4PI"]
+__all__ = ["hg", "hg_dr", "hg_p1_dr", "hg_sample_cos", "hg_sample_cos_dr", "INV_4PI"]
 
 INV_4PI = 1.0 / (4.0 * math.pi)
 
@@ -46,6 +47,12 @@ def hg_dr(cos_theta, g):
     import drjit as dr
     denom = 1.0 + g * g - 2.0 * g * cos_theta
     return (1.0 - g * g) * INV_4PI * dr.rsqrt(denom * denom * denom)
+
+
+def hg_p1_dr(cos_theta, g):
+    """The P1 part of Henyey–Greenstein: its Legendre expansion Σ (2l + 1) g^l P_l(cos θ) / 4π cut after l = 1,
+    (1 + 3 g cos θ) / 4π (negative where cos θ < -1 / 3g); Dr.Jit arrays."""
+    return (1.0 + 3.0 * g * cos_theta) * INV_4PI
 
 
 def hg_sample_cos(u, g):

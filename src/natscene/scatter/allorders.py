@@ -491,8 +491,9 @@ def view_images(scene: Scene, camera, sigma: float, g: float, seed: int = 0, noi
     collisions), without it both sources get the same factor. ``halves`` False: the images of the whole run
     (a leading axis of 1), gathered once instead of once per half; no noise figure then (``noise`` must be None).
     ``start``: each source's first pass as a multiple of its budget (clipped to [:data:`START_MIN`,
-    ``max_budget_scale``], to [1, ``max_budget_scale``] without a noise target; None: 1), e.g. a neighbouring node's ``stats["need"]``: the multiples at which this
-    node's last estimate meets the target (its photons scaled by (error / target)², above or below 1).
+    ``max_budget_scale``], to [1, ``max_budget_scale``] without a noise target; None: 1), e.g. a neighbouring
+    node's ``stats["need"]``: the multiples at which this node's last estimate meets the target (its photons scaled
+    by (error / target)², above or below 1).
     """
     st = scene.settings
     H, W = camera.height, camera.width

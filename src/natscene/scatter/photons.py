@@ -79,7 +79,7 @@ import mitsuba as mi
 from natscene.scatter.bands import band_table
 from natscene.scatter.majorant import MajorantGrid, flight_event
 from natscene.scatter.medium import ray_box_dr
-from natscene.scatter.phase import hg_dr, hg_sample_cos_dr
+from natscene.scatter.phase import hg_dr, hg_p1_dr, hg_sample_cos_dr
 
 __all__ = ["SunBeam", "SkySource", "InscatterTally", "trace"]
 
@@ -445,7 +445,7 @@ def _walk(s: _Walk, rec_p, rec_w, rec_wts, rec_mult, rec_k, rec_vis, rec_state, 
             light = light * boost
         val = ratio * (light if s.phase else vis_x * boost)
         if s.p1 is not None:      # the diffuse orders: the phase function's P1 part, (1 + 3 g cos) / 4 pi
-            p1 = vis_x * (1.0 + 3.0 * s.g * dr.dot(w, dr.normalize(s.cam - x))) * (1.0 / (4.0 * math.pi))
+            p1 = vis_x * hg_p1_dr(dr.dot(w, dr.normalize(s.cam - x)), s.g)
             if s.similarity is not None:
                 p1 = p1 * boost
             val = dr.select(kk >= s.p1[0], ratio * p1, val)
