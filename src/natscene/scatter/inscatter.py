@@ -52,7 +52,7 @@ import drjit as dr
 import mitsuba as mi
 
 from natscene.scatter.medium import ray_box_dr
-from natscene.scatter.rays import camera_rays, pixel_mean
+from natscene.scatter.rays import camera_rays, pixel_means
 from natscene.scatter.single import one_minus_exp
 
 __all__ = ["voxel_camera_depth", "depth_texture", "visibility", "weighted_voxel_integrals", "block_sum",
@@ -230,7 +230,7 @@ def gather(med, camera, sigma: float, caches: np.ndarray, denominators: np.ndarr
     o, d, _ = camera_rays(camera, supersample, stratified=supersample > 1)
     acc = _march(med, tex, C, o, d, dr.opaque(mi.Float, float(sigma) * med.scale), med.voxel * step_voxels, lo, cache_ext,
                  np.asarray(box_lo, np.float64), np.asarray(box_hi, np.float64), grid)
-    return np.stack([pixel_mean(a, supersample, W, H) for a in acc])
+    return pixel_means(acc, supersample, W, H)
 
 
 def _local_linear(num: np.ndarray, den: np.ndarray, guide: np.ndarray, width: float):

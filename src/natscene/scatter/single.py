@@ -46,7 +46,7 @@ import drjit as dr
 import mitsuba as mi
 
 from natscene.scatter.medium import Medium, ray_box_dr
-from natscene.scatter.rays import camera_rays, pixel_mean
+from natscene.scatter.rays import camera_rays, pixel_means
 
 __all__ = ["march_view", "one_minus_exp", "sun_segment"]
 
@@ -127,14 +127,14 @@ def march_view(med: Medium, camera, sigmas, step_voxels: float = 0.5, supersampl
     o, d, _ = camera_rays(camera, supersample, stratified=supersample > 1)
     depth, t_hit, s_sun, s_amb = _march(med, o, d, sigmas, med.voxel * step_voxels, float(rho_threshold),
                                         med.sun_depth_tex is not None, grid)
-    T = [pixel_mean(dr.exp(-s * med.scale * depth), supersample, W, H) for s in sigmas]
-    S_sun = [pixel_mean(x, supersample, W, H) for x in s_sun]
-    size = float(np.max(med.bbox_max - med.bbox_min))
-    S_amb = [pixel_mean(x, supersample, W, H) / size for x in s_amb]
+    ns = len(sigmas)
     hit = t_hit >= 0
-    n_hit = pixel_mean(mi.Float(hit), supersample, W, H)
-    t_sum = pixel_mean(dr.select(hit, t_hit, 0.0), supersample, W, H)
+    means = pixel_means([dr.exp(-s * med.scale * depth) for s in sigmas] + list(s_sun) + list(s_amb)
+                        + [mi.Float(hit), dr.select(hit, t_hit, 0.0)], supersample, W, H)
+    T, S_sun = means[:ns], means[ns:2 * ns]
+    S_amb = means[2 * ns:3 * ns] / float(np.max(med.bbox_max - med.bbox_min))
+    n_hit, t_sum = means[3 * ns], means[3 * ns + 1]
     with np.errstate(invalid="ignore", divide="ignore"):
         t_c = np.where(n_hit > 0, t_sum / np.maximum(n_hit, 1e-12), np.nan).astype(np.float32)
-    return {"S_sun": np.stack(S_sun), "S_amb": np.stack(S_amb), "T": np.stack(T),
+    return {"S_sun": S_sun, "S_amb": S_amb, "T": T,
             "t_hit": t_c, "footprint": (n_hit > 0).astype(np.float32)}
