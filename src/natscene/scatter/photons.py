@@ -336,9 +336,9 @@ class _Walk:
     lo: object
     ext: object
     res: tuple
-    caches: list          # (factor, dims, cells) per cache
+    caches: list          # (factor, dims, cells, offset) per cache: its numerators begin at offset in accs
     slot_tabs: list       # per cache: the band slot of each order (-1: not tallied)
-    accs: list            # per cache, per channel: UInt64 fixed-point numerators
+    accs: list            # per channel: UInt64 fixed-point numerators of every cache, one after the other
     hist: object          # UInt64 [max_order + 1]
     trunc: object         # UInt64 [1]
     max_order: int
@@ -347,7 +347,7 @@ class _Walk:
     window: object
     split_max: int
     similarity: object    # None, or (first order, 1 - g, log g): high-order similarity (:func:`_walk`)
-    p1: object = None     # None, or (first order, per cache the numerators' size): P1 tallies (:func:`_walk`)
+    p1: object = None     # None, or (first order, the numerators' size): P1 tallies (:func:`_walk`)
 
 
 @dr.syntax
@@ -449,14 +449,19 @@ def _walk(s: _Walk, rec_p, rec_w, rec_wts, rec_mult, rec_k, rec_vis, rec_state, 
             if s.similarity is not None:
                 p1 = p1 * boost
             val = dr.select(kk >= s.p1[0], ratio * p1, val)
-        for ci, (factor, dims, ncell) in enumerate(s.caches):
+        # the order's band lives in one cache: one scatter per channel (an atomic add per lane, the walk's
+        # costliest step), at that cache's cell
+        idx = mi.UInt32(0)
+        tallied = mi.Bool(False)
+        for ci, (factor, dims, ncell, offset) in enumerate(s.caches):
             slot = dr.gather(mi.Int32, s.slot_tabs[ci], kk)
-            idx = mi.UInt32(dr.maximum(slot, 0)) * ncell + _cache_index(x, s.lo, s.ext, s.res, factor, dims)
-            if s.p1 is not None:  # a negative tally goes to the second half of the (doubled) numerators
-                idx = dr.select(val < 0, idx + s.p1[1][ci], idx)
-            for c in range(nch):
-                dr.scatter_reduce(dr.ReduceOp.Add, s.accs[ci][c], _fixed(dr.abs(val * wts[c])), idx,
-                                  inside & (slot >= 0))
+            idx = dr.select(slot >= 0, offset + mi.UInt32(dr.maximum(slot, 0)) * ncell
+                            + _cache_index(x, s.lo, s.ext, s.res, factor, dims), idx)
+            tallied = tallied | (slot >= 0)
+        if s.p1 is not None:  # a negative tally goes to the second half of the (doubled) numerators
+            idx = dr.select(val < 0, idx + s.p1[1], idx)
+        for c in range(nch):
+            dr.scatter_reduce(dr.ReduceOp.Add, s.accs[c], _fixed(dr.abs(val * wts[c])), idx, inside & tallied)
         flying = flying & ~accept & ~escaped
         # a real collision: order k, the histogram, the end of the walk at max_order, the weight window
         p = dr.select(accept, x, p)
@@ -600,21 +605,25 @@ def trace(med, grid: MajorantGrid, source, sigma: float, g: float, camera_positi
         slot[:k_min] = -1
         slot_np.append(slot)
     nch = source.channels
+    sizes = [max(1, geo[ci][2] * len(band_sets[ci])) for ci in range(len(caches))]
+    offsets = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
+    total = int(offsets[-1])
+    if 2 * total >= 2 ** 32:
+        raise ValueError(f"the caches' {total} numerators do not fit 32-bit indices: use larger cache cells")
     # sigma_t, g, the tally rate and the lobe's share enter the kernel as opaque values (not literals), so that
     # every (sigma_t, g) node of a precompute reuses the same compiled kernel instead of compiling its own
     s = _Walk(med, grid, dr.opaque(mi.Float, float(sigma) * med.scale), dr.opaque(mi.Float, float(g)),
               dr.opaque(mi.Float, float(camera_lobe)), camera_lobe > 0 and vis is not None,
               dr.opaque(mi.Float, float(tally_rate) / float(med.voxel)), vis,
               mi.ScalarPoint3f(*[float(e) for e in camera_position]), _vec(med.bbox_min),
-              _vec(med.bbox_max - med.bbox_min), res, geo, [mi.Int32(x) for x in slot_np],
-              [[dr.zeros(mi.UInt64, max(1, geo[ci][2] * len(band_sets[ci]))) for _ in range(nch)]
-               for ci in range(len(caches))],
+              _vec(med.bbox_max - med.bbox_min), res,
+              [(f, dims, ncell, int(offsets[ci])) for ci, (f, dims, ncell) in enumerate(geo)],
+              [mi.Int32(x) for x in slot_np], [dr.zeros(mi.UInt64, total) for _ in range(nch)],
               dr.zeros(mi.UInt64, max_order + 1), dr.zeros(mi.UInt64, 1), int(max_order), int(k_min), bool(phase),
               window, int(split_max), None)
     if p1_order > 0 and phase:
-        sizes = [max(1, geo[ci][2] * len(band_sets[ci])) for ci in range(len(caches))]
-        s.p1 = (dr.opaque(mi.UInt32, int(p1_order)), sizes)
-        s.accs = [[dr.zeros(mi.UInt64, 2 * sizes[ci]) for _ in range(nch)] for ci in range(len(caches))]
+        s.p1 = (dr.opaque(mi.UInt32, int(p1_order)), total)
+        s.accs = [dr.zeros(mi.UInt64, 2 * total) for _ in range(nch)]
     if similarity_order > 0 and g > 0.05:
         s.similarity = (dr.opaque(mi.UInt32, int(similarity_order)), dr.opaque(mi.Float, 1.0 - float(g)),
                         dr.opaque(mi.Float, math.log(float(g))))
@@ -645,7 +654,7 @@ def trace(med, grid: MajorantGrid, source, sigma: float, g: float, camera_positi
                          wts=[dr.zeros(mi.Float, size) for _ in range(nch)])
             spawned, coll = _walk(s, recs["p"], recs["w"], recs["wts"], recs["mult"], recs["k"], recs["vis"],
                                   recs["state"], recs["inc"], dr.opaque(mi.UInt32, count), lanes, cap, spawn)
-            dr.eval(spawned, coll, *[a for acc in s.accs for a in acc], s.hist, s.trunc,
+            dr.eval(spawned, coll, *s.accs, s.hist, s.trunc,
                     *[v for key, v in spawn.items() if key != "wts"], *spawn["wts"])
             collisions += int(np.asarray(coll).astype(np.int64).sum())
             if window is None:
@@ -655,11 +664,11 @@ def trace(med, grid: MajorantGrid, source, sigma: float, g: float, camera_positi
         if progress:
             progress(done, n_photons)
     scale = (unit or 0.0) / FIXED
-    accs = [[np.asarray(a, np.float64) for a in acc] for acc in s.accs]
+    accs = [np.asarray(a, np.float64) for a in s.accs]
     if s.p1 is not None:          # the positive tallies less the negative ones
-        accs = [[a[:n] - a[n:] for a in acc] for acc, n in zip(accs, s.p1[1])]
-    nums = [np.stack([(a[:geo[ci][2] * len(band_sets[ci])] * scale)
-                      .reshape(len(band_sets[ci]), geo[ci][1][2], geo[ci][1][1], geo[ci][1][0]) for a in accs[ci]])
+        accs = [a[:total] - a[total:] for a in accs]
+    nums = [np.stack([(a[offsets[ci]:offsets[ci] + geo[ci][2] * len(band_sets[ci])] * scale)
+                      .reshape(len(band_sets[ci]), geo[ci][1][2], geo[ci][1][1], geo[ci][1][0]) for a in accs])
             for ci in range(len(caches))]
     h = np.asarray(s.hist, np.float64) * scale
     tot_light = h.sum()
