@@ -187,16 +187,17 @@ class Scene:
     """The volume prepared once for a view: medium with the sun optical depth, majorant grid, emitters, and
     per camera position the voxels' optical depth to the camera. ``g_grid``, ``sigma_grid``: the nodes that one
     set of the sky's shadow rays serves (None: each node's own); ``shadow_seed``: their seed (a frame's render
-    seed: two seeds, two independent runs)."""
+    seed: two seeds, two independent runs); ``med``: the volume's medium made for the lighting's sun direction
+    (:func:`natscene.scatter.medium.make_medium`) when the caller has it already (None: made here)."""
 
     def __init__(self, volume, lighting: Lighting, settings: AllOrdersSettings, g_grid=None, sigma_grid=None,
-                 shadow_seed: int = 0):
+                 shadow_seed: int = 0, med=None):
         from natscene.scatter.majorant import majorant_grid
         from natscene.scatter.medium import make_medium
         from natscene.scatter.photons import SkySource, SunBeam
         self.settings = settings
         self.volume = volume
-        self.med = make_medium(volume, lighting.sun_dir)
+        self.med = med if med is not None else make_medium(volume, lighting.sun_dir)
         self.grid = majorant_grid(volume.density, volume.bbox_min, volume.bbox_max, settings.majorant_voxels)
         self.bounds = self.grid.occupied_bounds()
         self.sun = SunBeam(self.grid, volume.bbox_min, volume.bbox_max, self.med.sun_dir)

@@ -528,7 +528,8 @@ class AllOrders(Transport):
             dome = dome if dome is not None else frame_dome(med.sun_dir, sky_settings)
         else:
             dome = None
-        scene = Scene(volume, Lighting(med.sun_dir, dome), st, shadow_seed=seed)   # another seed, another run
+        # another seed, another run (the shadow rays' too); the medium is the frame's own
+        scene = Scene(volume, Lighting(med.sun_dir, dome), st, shadow_seed=seed, med=med)
         vi = view_images(scene, camera, sigma, g, seed=seed, halves=False)       # a frame needs no noise figure
         a_s = L_in * beta * hg(cos_t, g) * single["S_sun"][0]
         a_m = L_in * np.tensordot(band_weights(st.sun_bands, vi.sun_orders, beta)[0], vi.sun, 1)
