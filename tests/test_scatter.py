@@ -314,3 +314,36 @@ def test_gather_passes_over_empty_space_exactly():
     skipping = gather(med, CAM, 0.5, caches, den, 2, 0.5, 1, grid=grid)
     assert every.max() > 0.05
     np.testing.assert_allclose(skipping, every, rtol=0, atol=1e-6 * float(every.max()))
+
+
+def test_gather_marches_once_for_all_its_images():
+    """A gather of several images returns each image as gathered alone, from one run of its march: as many kernel
+    launches as for one image (``natscene.scatter.rays.pixel_means`` evaluates the march's outputs together; one
+    at a time, each block sum would run the whole march again)."""
+    import drjit as dr
+    from natscene.scatter.inscatter import gather
+    from natscene.scatter.reference_scene import CAM, SUN
+    vol = _two_lumps()
+    d = vol.density
+    nz, ny, nx = d.shape
+    med = make_medium(vol, SUN)
+    rng = np.random.default_rng(1)
+    den = (d.reshape(nz // 2, 2, ny // 2, 2, nx // 2, 2).sum((1, 3, 5)) + 1e-3).astype(np.float32)
+    caches = (rng.random((3,) + den.shape) * den).astype(np.float32)
+
+    def launches(c):
+        dr.set_flag(dr.JitFlag.KernelHistory, True)
+        try:
+            dr.kernel_history()
+            img = gather(med, CAM, 0.5, c, den, 2, 0.5, 4)
+            hist = dr.kernel_history()
+        finally:
+            dr.set_flag(dr.JitFlag.KernelHistory, False)
+        return img, sum(1 for k in hist if k["type"] == dr.KernelType.JIT)
+
+    together, n_three = launches(caches)
+    assert together.max() > 0.05
+    for i in range(3):
+        alone, n_one = launches(caches[i:i + 1])
+        np.testing.assert_allclose(together[i], alone[0], rtol=1e-6, atol=1e-7)
+        assert n_three == n_one, (n_three, n_one)

@@ -449,8 +449,7 @@ def _walk(s: _Walk, rec_p, rec_w, rec_wts, rec_mult, rec_k, rec_vis, rec_state, 
             if s.similarity is not None:
                 p1 = p1 * boost
             val = dr.select(kk >= s.p1[0], ratio * p1, val)
-        # the order's band lives in one cache: one scatter per channel (an atomic add per lane, the walk's
-        # costliest step), at that cache's cell
+        # the order's band lives in one cache: one scatter per channel (an atomic add per lane) at that cache's cell
         idx = mi.UInt32(0)
         tallied = mi.Bool(False)
         for ci, (factor, dims, ncell, offset) in enumerate(s.caches):
@@ -609,7 +608,9 @@ def trace(med, grid: MajorantGrid, source, sigma: float, g: float, camera_positi
     offsets = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
     total = int(offsets[-1])
     if 2 * total >= 2 ** 32:
-        raise ValueError(f"the caches' {total} numerators do not fit 32-bit indices: use larger cache cells")
+        raise ValueError(f"the caches' {total} numerators do not fit 32-bit indices: use larger cache cells "
+                         "(precompute.all_orders.fine_voxels / coarse_voxels, shots.<name>.render.fine_voxels / "
+                         "coarse_voxels)")
     # sigma_t, g, the tally rate and the lobe's share enter the kernel as opaque values (not literals), so that
     # every (sigma_t, g) node of a precompute reuses the same compiled kernel instead of compiling its own
     s = _Walk(med, grid, dr.opaque(mi.Float, float(sigma) * med.scale), dr.opaque(mi.Float, float(g)),

@@ -6,10 +6,9 @@ Defines the camera rays on the Dr.Jit side for the pinhole camera of :mod:`natsc
 (DESIGN §3, Geometry):
 
 -   :func:`camera_rays`: origins, directions and pixel indices of W*H*spp samples.
--   :func:`pixel_mean`: the box-filtered average of each pixel's samples.
--   :func:`pixel_means`: the same for several arrays, evaluated in one kernel launch. The outputs of one
-    symbolic loop are lazy: converting them one by one re-runs the whole loop for each, so a march with C
-    accumulators costs C marches unless they are evaluated together.
+-   :func:`pixel_means`: the box-filtered average of each pixel's samples, for several arrays at once. The arrays
+    are evaluated together before their block sums: a block sum evaluates its input on its own, so taking a
+    symbolic loop's C outputs one at a time would run the loop C times.
 
 Sample s of pixel (i, j) lives at flat index ``(i * W + j) * spp + s`` so that ``dr.block_sum(x, spp)``
 returns one value per pixel in row-major order. Sub-pixel positions are either a stratified grid
@@ -24,7 +23,7 @@ import natscene.variant  # noqa: F401
 import drjit as dr
 import mitsuba as mi
 
-__all__ = ["camera_rays", "pixel_mean", "pixel_means"]
+__all__ = ["camera_rays", "pixel_means"]
 
 
 def camera_rays(camera, spp: int, rng=None, stratified: bool = False, pixels=None):
@@ -68,13 +67,8 @@ def camera_rays(camera, spp: int, rng=None, stratified: bool = False, pixels=Non
     return o, d, pix
 
 
-def pixel_mean(x, spp: int, width: int, height: int) -> np.ndarray:
-    """Average of the spp samples of each pixel as a numpy (H, W) float32 array."""
-    return pixel_means([x], spp, width, height)[0]
-
-
 def pixel_means(xs, spp: int, width: int, height: int) -> np.ndarray:
-    """(len(xs), H, W) float32: :func:`pixel_mean` of each array of ``xs``, all evaluated together."""
+    """(len(xs), H, W) float32: the average of the spp samples of each pixel, for each array of ``xs``."""
     if not xs:
         return np.zeros((0, height, width), np.float32)
     dr.eval(*xs)        # one launch of the loop that made them (a block sum evaluates its input alone)
