@@ -19,6 +19,13 @@ sun's share of the variance at the defaults is 2 (N_0² - N_sun²) / N_0² and t
 :class:`natscene.scatter.allorders.AllOrdersSettings`, e.g. ``'{"importance_floor": 0.02}'``) on top of the frame's
 (:func:`natscene.scatter.allorders.frame_settings`), for every set of overrides.
 
+Each row also holds the two frames' mean pixel by opacity band (0.1-0.5, 0.5-0.9, 0.9-0.99, above): a setting's
+bias at the thin edges shows as a shift of the thin bands against the defaults' (the opaque bands stay put).
+``sky_coarse_cells.patch`` (``git apply`` it; ``SKYC=4`` in the environment) puts the sky's orders >= 2 in cells of
+4 voxels while the sun keeps the shot's cells:
+
+    SKYC=4 .venv/bin/python experiments/frame_budget/run.py '{}'
+
 Written to results/experiments/frame_budget.json.
 """
 import argparse
@@ -26,6 +33,8 @@ import json
 import sys
 import time
 from pathlib import Path
+
+import numpy as np
 
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "benchmarks"))
@@ -38,6 +47,9 @@ from natscene.keyframes.frame import render_shot_frame  # noqa: E402
 from natscene.variant import select_variant  # noqa: E402
 from natscene.volume.grid import load_volume  # noqa: E402
 from transport_version import FRAME_PARAMS  # noqa: E402
+
+
+OPACITY_BANDS = ((0.1, 0.5), (0.5, 0.9), (0.9, 0.99), (0.99, 1.01))
 
 
 def main():
@@ -79,10 +91,15 @@ def main():
                                                            "render": {**shot["render"], **over, "seed": seed}},
                                             denoiser=oidn))
             seconds.append(round(time.perf_counter() - t0, 2))
-        pix = cloud_pixels(frames[0]["features"]["opacity"])
+        opacity = frames[0]["features"]["opacity"]
+        pix = cloud_pixels(opacity)
+        mean = np.mean([f["raw"] for f in frames], axis=0).mean(-1)
         row = {"render": over, "seconds": seconds,
                "noise_figure_raw": round(noise_figure(frames[0]["raw"], frames[1]["raw"], pix), 5),
-               "noise_figure_denoised": round(noise_figure(frames[0]["final"], frames[1]["final"], pix), 5)}
+               "noise_figure_denoised": round(noise_figure(frames[0]["final"], frames[1]["final"], pix), 5),
+               # the two frames' mean pixel (R, G, B averaged) by opacity band: a setting's bias at the thin edges
+               "mean_by_opacity": {f"{lo}-{min(hi, 1)}": round(float(mean[(opacity >= lo) & (opacity < hi)].mean()), 5)
+                                   for lo, hi in OPACITY_BANDS}}
         print(json.dumps(row), flush=True)
         rows.append(row)
     out = Path(a.results) / "experiments" / "frame_budget.json"
