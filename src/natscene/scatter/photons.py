@@ -440,12 +440,13 @@ def _walk(s: _Walk, rec_p, rec_w, rec_wts, rec_mult, rec_k, rec_vis, rec_state, 
             s.med, s.grid, p, w, sig_l, rng, flying, start & flying, t, t1, tau, (ix, iy, iz, tmx, tmy, tmz), rate)
         ix, iy, iz, tmx, tmy, tmz = cells
         vis_x = _visibility(s.vis, x, s.lo, s.ext)
-        light = vis_x * hg_dr(dr.dot(w, dr.normalize(s.cam - x)), s.g)
+        cos_cam = dr.dot(w, dr.normalize(s.cam - x))
+        light = vis_x * hg_dr(cos_cam, s.g)
         if s.similarity is not None:  # a similar flight: the real mu_t is boost x the similar one
             light = light * boost
         val = ratio * (light if s.phase else vis_x * boost)
         if s.p1 is not None:      # the diffuse orders: the phase function's P1 part, (1 + 3 g cos) / 4 pi
-            p1 = vis_x * hg_p1_dr(dr.dot(w, dr.normalize(s.cam - x)), s.g)
+            p1 = vis_x * hg_p1_dr(cos_cam, s.g)
             if s.similarity is not None:
                 p1 = p1 * boost
             val = dr.select(kk >= s.p1[0], ratio * p1, val)
@@ -607,7 +608,7 @@ def trace(med, grid: MajorantGrid, source, sigma: float, g: float, camera_positi
     sizes = [max(1, geo[ci][2] * len(band_sets[ci])) for ci in range(len(caches))]
     offsets = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
     total = int(offsets[-1])
-    if 2 * total >= 2 ** 32:
+    if (2 if p1_order > 0 and phase else 1) * total >= 2 ** 32:     # P1 doubles the numerators
         raise ValueError(f"the caches' {total} numerators do not fit 32-bit indices: use larger cache cells "
                          "(precompute.all_orders.fine_voxels / coarse_voxels, shots.<name>.render.fine_voxels / "
                          "coarse_voxels)")
