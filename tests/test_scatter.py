@@ -295,21 +295,26 @@ def test_order_one_passes_over_empty_space_exactly():
         np.testing.assert_array_equal(skipping[k], every[k], err_msg=k)
 
 
+def _gather_inputs(seed: int):
+    """(volume, medium, 3 random cache fields, their denominators) on two lumps far apart, cells of 2 voxels."""
+    from natscene.scatter.reference_scene import SUN
+    vol = _two_lumps()
+    d = vol.density
+    nz, ny, nx = d.shape
+    den = (d.reshape(nz // 2, 2, ny // 2, 2, nx // 2, 2).sum((1, 3, 5)) + 1e-3).astype(np.float32)
+    caches = (np.random.default_rng(seed).random((3,) + den.shape) * den).astype(np.float32)
+    return vol, make_medium(vol, SUN), caches, den
+
+
 def test_gather_passes_over_empty_space_exactly():
     """The cache gather's march passes over empty majorant cells in whole steps: the same sample points, so the
     same images as a march that takes every step (two lumps far apart in a wide box, random cache fields)."""
     from natscene.scatter.inscatter import gather
     from natscene.scatter.majorant import majorant_grid
-    from natscene.scatter.reference_scene import CAM, SUN
-    vol = _two_lumps()
-    d = vol.density
-    nz, ny, nx = d.shape
-    med = make_medium(vol, SUN)
-    grid = majorant_grid(d, vol.bbox_min, vol.bbox_max, 4)
+    from natscene.scatter.reference_scene import CAM
+    vol, med, caches, den = _gather_inputs(0)
+    grid = majorant_grid(vol.density, vol.bbox_min, vol.bbox_max, 4)
     assert (np.asarray(grid.dr_skip) > 0).any()
-    rng = np.random.default_rng(0)
-    den = (d.reshape(nz // 2, 2, ny // 2, 2, nx // 2, 2).sum((1, 3, 5)) + 1e-3).astype(np.float32)
-    caches = (rng.random((3,) + den.shape) * den).astype(np.float32)
     every = gather(med, CAM, 0.5, caches, den, 2, 0.5, 1)
     skipping = gather(med, CAM, 0.5, caches, den, 2, 0.5, 1, grid=grid)
     assert every.max() > 0.05
@@ -322,14 +327,8 @@ def test_gather_marches_once_for_all_its_images():
     at a time, each block sum would run the whole march again)."""
     import drjit as dr
     from natscene.scatter.inscatter import gather
-    from natscene.scatter.reference_scene import CAM, SUN
-    vol = _two_lumps()
-    d = vol.density
-    nz, ny, nx = d.shape
-    med = make_medium(vol, SUN)
-    rng = np.random.default_rng(1)
-    den = (d.reshape(nz // 2, 2, ny // 2, 2, nx // 2, 2).sum((1, 3, 5)) + 1e-3).astype(np.float32)
-    caches = (rng.random((3,) + den.shape) * den).astype(np.float32)
+    from natscene.scatter.reference_scene import CAM
+    _, med, caches, den = _gather_inputs(1)
 
     def launches(c):
         dr.set_flag(dr.JitFlag.KernelHistory, True)

@@ -46,10 +46,8 @@ from natscene.geometry import sun_direction  # noqa: E402
 from natscene.keyframes.frame import render_shot_frame  # noqa: E402
 from natscene.variant import select_variant  # noqa: E402
 from natscene.volume.grid import load_volume  # noqa: E402
+from thick_cloud import BANDS as OPACITY_BANDS  # noqa: E402
 from transport_version import FRAME_PARAMS  # noqa: E402
-
-
-OPACITY_BANDS = ((0.1, 0.5), (0.5, 0.9), (0.9, 0.99), (0.99, 1.01))
 
 
 def main():
