@@ -40,9 +40,9 @@ from _common import ROOT, write_result
 import natscene  # noqa: F401
 from natscene.config import load_yaml_config
 from natscene.geometry import Camera
+from natscene.scatter.reference_scene import band_ratios
 
 REFS = ROOT / "tests" / "data" / "transport_volpath_thick.npz"
-BANDS = ((0.1, 0.5), (0.5, 0.9), (0.9, 0.99), (0.99, 1.01))
 
 
 def scene():
@@ -77,12 +77,6 @@ def errors(img, ref, ref_noise, mask) -> dict:
     blk = np.mean((block_means(img, mask) - block_means(ref, mask)) ** 2) - ref_noise["block"] ** 2
     return {"pixel": float(np.sqrt(max(pix, 0.0)) / m), "block": float(np.sqrt(max(blk, 0.0)) / m),
             "mean_ratio": float(img[mask].mean() / m)}
-
-
-def bands(img, ref, opacity) -> dict:
-    return {f"{lo}-{hi if hi <= 1 else 1}": float(img[(opacity >= lo) & (opacity < hi)].sum()
-                                                  / ref[(opacity >= lo) & (opacity < hi)].sum())
-            for lo, hi in BANDS}
 
 
 BASELINE_SCRIPT = """
@@ -138,7 +132,8 @@ def baseline_runs(base: Path, vol, cam, sun, sigma, g, beta, seeds: int) -> list
 
 
 def summary(runs: list, ref, ref_noise, mask, opacity) -> dict:
-    rows = [{"seconds": t, **errors(img, ref, ref_noise, mask), "bands": bands(img, ref, opacity)} for t, img in runs]
+    rows = [{"seconds": t, **errors(img, ref, ref_noise, mask), "bands": band_ratios(img, ref, opacity)}
+            for t, img in runs]
     return {"seconds": float(np.mean([r["seconds"] for r in rows])),
             "pixel_rmse": float(np.mean([r["pixel"] for r in rows])),
             "block_rmse": float(np.mean([r["block"] for r in rows])),

@@ -26,13 +26,12 @@ from natscene.denoise.oidn import OIDN
 from natscene.geometry import Camera
 from natscene.scatter.allorders import frame_settings
 from natscene.scatter.medium import make_medium
-from natscene.scatter.reference_scene import NOSKY
+from natscene.scatter.reference_scene import NOSKY, band_ratios
 from natscene.scatter.render import render
 from natscene.scatter.single import march_view
 from natscene.volume.build import build_volume
 
 ROOT = Path(__file__).resolve().parents[2]
-BANDS = ((0.1, 0.5), (0.5, 0.9), (0.9, 0.99), (0.99, 1.01))
 
 
 def _blocks(x: np.ndarray) -> np.ndarray:
@@ -77,8 +76,7 @@ def main(args):
             for name, img in (("raw", raw), ("oidn", den)):
                 e2 = np.mean(((img - ref)[cloud] / level) ** 2) - np.mean((ref_noise[cloud] / level) ** 2)
                 blocks = np.sqrt(np.mean(((_blocks(img) - _blocks(ref)) / _blocks(ref))[full] ** 2))
-                bands = [float(img[(opacity >= lo) & (opacity < hi)].sum() / ref[(opacity >= lo) & (opacity < hi)].sum())
-                         for lo, hi in BANDS]
+                bands = band_ratios(img, ref, opacity).values()
                 parts.append(f"{name}: pixel {np.sqrt(max(e2, 0.0)):.4f}, blocks {blocks:.4f}, bands "
                              + " / ".join(f"{b:.3f}" for b in bands))
             print(f"cells {arg} seed {seed}: {seconds:.1f} s | " + " | ".join(parts), flush=True)
