@@ -43,8 +43,8 @@ from natscene.config import load_yaml_config, validate_config  # noqa: E402
 from natscene.denoise.noise import cloud_pixels, noise_figure  # noqa: E402
 from natscene.denoise.oidn import OIDN  # noqa: E402
 from natscene.geometry import sun_direction  # noqa: E402
-from natscene.scatter.reference_scene import OPACITY_BANDS  # noqa: E402
 from natscene.keyframes.frame import render_shot_frame  # noqa: E402
+from natscene.scatter.reference_scene import OPACITY_BANDS  # noqa: E402
 from natscene.variant import select_variant  # noqa: E402
 from natscene.volume.grid import load_volume  # noqa: E402
 from transport_version import FRAME_PARAMS  # noqa: E402

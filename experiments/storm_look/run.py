@@ -90,7 +90,8 @@ def main():
             az, el = (float(v) for v in over["sun"])
             state["sun"] = {"direction": sun_direction(az, el).tolist(), "azimuth": az, "elevation": el}
         state["params"].update(over.get("params", {}))
-        frame = {**shot, "render": {**shot["render"], **over.get("render", {})}, "sky": {**shot["sky"], **over.get("sky", {})}}
+        frame = {**shot, "render": {**shot["render"], **over.get("render", {})},
+                 "sky": {**shot["sky"], **over.get("sky", {})}}
         t0 = time.perf_counter()
         out = render_shot_frame(cloud, state, frame, denoiser=None)
         seconds = round(time.perf_counter() - t0, 1)
@@ -103,9 +104,12 @@ def main():
         write_png(out_dir / f"{name}.png", crop, exposure=float(day["exposure"]))
         crops.append(crop)
     h = max(c.shape[0] for c in crops)
-    gap = np.zeros((h, 4, 3), np.float32)
-    sheet = np.concatenate(sum(([np.pad(c, ((0, h - c.shape[0]), (0, 0), (0, 0))), gap] for c in crops), [])[:-1],
-                           axis=1)
+    parts = []
+    for c in crops:                                   # the crops padded to one height, 4 black columns apart
+        if parts:
+            parts.append(np.zeros((h, 4, 3), np.float32))
+        parts.append(np.pad(c, ((0, h - c.shape[0]), (0, 0), (0, 0))))
+    sheet = np.concatenate(parts, axis=1)
     write_png(out_dir / "sheet.png", np.repeat(np.repeat(sheet, 3, 0), 3, 1), exposure=float(day["exposure"]))
     (res / "experiments" / "storm_look.json").write_text(json.dumps(rows, indent=1) + "\n")
     print(f"wrote {res / 'experiments' / 'storm_look.json'} and {out_dir}/")
