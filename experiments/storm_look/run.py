@@ -14,29 +14,30 @@ render settings (HG phase, no denoiser) at 320x240 for each variant, given as ``
 
 Per variant it prints the luminance of the opaque cloud pixels (opacity > 0.99): the 5th, 50th and 95th
 percentile, their contrast p5 / p95, the share above 1 (clipped by the PNG preview), the mean of the top 30 % and
-the bottom 15 % of the cloud's rows (the towers and the base) and the sky beside the cloud. Written to
+the bottom 15 % of the cloud's rows (its top: the anvil, and its base) and the sky beside the cloud. Written to
 ``results/experiments/storm_look.json`` and ``results/experiments/storm_look/<name>.png`` (the cloud's crop at the
 shot's exposure) and ``sheet.png`` (the crops side by side, 3x).
 """
 import argparse
+import copy
 import json
+import sys
 import time
 from pathlib import Path
 
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT / "benchmarks"))
 
-import natscene  # noqa: E402,F401
 from natscene import io  # noqa: E402
 from natscene.color import luminance  # noqa: E402
 from natscene.config import load_yaml_config, validate_config  # noqa: E402
-from natscene.geometry import sun_direction  # noqa: E402
 from natscene.io import write_png  # noqa: E402
 from natscene.keyframes.frame import render_shot_frame  # noqa: E402
 from natscene.variant import select_variant  # noqa: E402
 from natscene.volume.grid import load_volume  # noqa: E402
-
+from shots import shot_state  # noqa: E402
 
 def look(img: np.ndarray, opacity: np.ndarray) -> dict:
     """Luminance statistics of the opaque cloud pixels (above)."""
@@ -53,8 +54,8 @@ def look(img: np.ndarray, opacity: np.ndarray) -> dict:
     p5, p50, p95 = (float(v) for v in np.percentile(y[m], [5, 50, 95]))
     return {"opaque_pixels": int(m.sum()), "p5": round(p5, 4), "p50": round(p50, 4), "p95": round(p95, 4),
             "contrast_p5_p95": round(p5 / p95, 3), "clipped": round(float(np.mean(img[m].max(-1) > 1)), 3),
-            "towers": round(float(y[top].mean()), 4), "base": round(float(y[base].mean()), 4),
-            "base_over_towers": round(float(y[base].mean() / y[top].mean()), 3),
+            "top": round(float(y[top].mean()), 4), "base": round(float(y[base].mean()), 4),
+            "base_over_top": round(float(y[base].mean() / y[top].mean()), 3),
             "sky_beside": round(float(y[beside].mean()), 4) if beside.any() else None}
 
 
@@ -85,10 +86,10 @@ def main():
         unknown = set(over) - {"sun", "params", "render", "sky"}
         if unknown:
             raise SystemExit(f"{name}: unknown keys {sorted(unknown)} (sun, params, render, sky)")
-        state = json.loads(json.dumps(base_state))
+        state = copy.deepcopy(base_state)
         if "sun" in over:
             az, el = (float(v) for v in over["sun"])
-            state["sun"] = {"direction": sun_direction(az, el).tolist(), "azimuth": az, "elevation": el}
+            state.update(shot_state(state["params"], az, el, state["camera"]))
         state["params"].update(over.get("params", {}))
         frame = {**shot, "render": {**shot["render"], **over.get("render", {})},
                  "sky": {**shot["sky"], **over.get("sky", {})}}
