@@ -156,10 +156,13 @@ def frame_settings(render: dict | None) -> AllOrdersSettings:
 
 @dataclass
 class Lighting:
-    """What lights the cloud for one view: sun direction (toward the sun) and the sky dome (or None)."""
+    """What lights the cloud for one view: sun direction (toward the sun), the sky dome (or None) and the ground
+    (None: the open ground of unit radiance; a :class:`natscene.scatter.skylight.GroundLight`: in the cloud's
+    shadow)."""
 
     sun_dir: np.ndarray
     dome: object = None
+    ground: object = None
 
 
 @dataclass
@@ -201,7 +204,8 @@ class Scene:
         self.grid = majorant_grid(volume.density, volume.bbox_min, volume.bbox_max, settings.majorant_voxels)
         self.bounds = self.grid.occupied_bounds()
         self.sun = SunBeam(self.grid, volume.bbox_min, volume.bbox_max, self.med.sun_dir)
-        self.sky = (SkySource(lighting.dome, *self.bounds, p_ground=settings.p_ground)
+        ground = None if lighting.ground is None else (lighting.ground, self.med)
+        self.sky = (SkySource(lighting.dome, *self.bounds, p_ground=settings.p_ground, ground=ground)
                     if lighting.dome is not None else None)
         self.factors = (int(settings.fine_voxels), int(settings.coarse_voxels))
         self.voxel_volume = float(np.prod(volume.voxel_size))

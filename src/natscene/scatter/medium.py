@@ -5,6 +5,7 @@ Cloud medium
 Defines the cloud medium on the Dr.Jit side (Dobashi et al. 2012, §4.3; DESIGN §3 "The cloud rendering model"):
 
 -   :class:`Medium`, :func:`make_medium`: the density texture and the sun optical-depth volume of one volume.
+-   :meth:`Medium.ground_sun_depth`: D toward the sun from the ground point below a ray (the ground's shadow).
 -   :func:`ray_box_dr`: the slab test on Dr.Jit arrays.
 -   :func:`active_mitsuba`: the mitsuba module with a variant active.
 
@@ -15,6 +16,8 @@ D(x) = ∫_0^∞ rho(x + s·l) ds (l: unit vector toward the sun), marched once 
 resolution. Because mu_t = sigma_t · rho · extinction_scale, the transmittance toward the sun for every
 sigma_t is then tau(x_l, x, sigma_t) = exp(-sigma_t · extinction_scale · D(x)) — one volume serves the whole
 sigma_t grid, the single-scattering march (Eq. 5) and the next-event estimation of the path tracer (Eq. 7).
+The same volume gives the cloud's shadow on the ground (y = 0, the world's ground: :mod:`natscene.volume.grid`):
+the sun's ray from a ground point x_g enters the box at x_e, and D(x_g) = D(x_e).
 
 References
 ----------
@@ -102,6 +105,20 @@ class Medium:
         for i in range(self.near_steps):
             acc += self.rho(p + s * ((i + 0.5) * h)) * h
         return acc + dr.select(to_face, 0.0, self.sun_depth_tex.eval(self.to_uvw(p + s * length))[0])
+
+    def ground_sun_depth(self, p, src):
+        """D(x_g) (world units) at the ground points x_g (y = 0) that the rays from world points ``p`` along the
+        unit directions ``src`` meet: the cloud's shadow on the ground that lights ``p`` from ``src``. Zero where
+        ``src`` does not point down or the sun's ray from x_g misses the box; a point below the ground is its own
+        ground point."""
+        down = src.y < 0
+        t = dr.select(down, -p.y / dr.select(down, src.y, -1.0), 0.0)
+        t = dr.clip(t, 0.0, 1e3 * float(np.max(self.bbox_max - self.bbox_min)))  # far off: the sun ray misses
+        xg = p + src * t
+        s = mi.Vector3f(*[float(c) for c in self.sun_dir])
+        t0, t1 = ray_box_dr(xg, s, self.bbox_min, self.bbox_max)
+        hit = down & (t1 > t0)
+        return dr.select(hit, self.sun_depth(xg + s * (t0 + 1e-3 * self.voxel)), 0.0)
 
 
 def _check_volume(volume) -> np.ndarray:

@@ -157,11 +157,14 @@ class SkySource:
     unit-radiance lower hemisphere (the ground). A direction ω (toward the source) is drawn from the dome's
     luminance table (probability 1 - ``p_ground``) or uniformly below the horizon; the photon starts on a
     face of ``box`` that faces ω, with probability ∝ the face's projected area, and carries
-    L_c(ω) A_proj(ω) / (pdf(ω) n) in channel c."""
+    L_c(ω) A_proj(ω) / (pdf(ω) n) in channel c. With ``ground`` (a :class:`natscene.scatter.skylight.GroundLight`
+    and the :class:`natscene.scatter.medium.Medium` of its shadow) a photon from the ground carries the ground's
+    skylit radiance in R, G, B and, in the ground channel, the sun's transmittance through the cloud to the ground
+    point it leaves."""
 
     channels = 4
 
-    def __init__(self, dome, box_min, box_max, p_ground: float = 0.25):
+    def __init__(self, dome, box_min, box_max, p_ground: float = 0.25, ground=None):
         from natscene.scatter.skylight import cell_directions
         self.dome = dome
         rgb = np.asarray(dome.rgb, np.float64)
@@ -181,6 +184,7 @@ class SkySource:
         self._pcell_dr = mi.Float(p_cell)
         self._cdf_dr = mi.Float(self.cdf)
         self.lobe = None          # (direction toward the camera, g, share): see toward()
+        self.ground = ground      # (GroundLight, Medium) or None: the open, unit-radiance ground
 
     def toward(self, camera_position, g: float = 0.7, share: float = 0.2) -> "SkySource":
         """This source with a share of its directions drawn from an HG(``g``) lobe of photon directions around
@@ -234,6 +238,10 @@ class SkySource:
             d_l = _scatter_dir(mi.Vector3f(dr.zeros(mi.Vector3f, n) + _vec(c)), g_l, rng)
             om = dr.select(use, -d_l, om)
         pdf, rad = self._pdf_radiance(om)
+        if self.ground is not None:
+            light, med = self.ground
+            below = om.y <= 0
+            rad = [r + dr.select(below, float(v), 0.0) for r, v in zip(rad[:3], light.sky)] + [rad[3]]
         if lobe is not None:
             pdf = (1.0 - share) * pdf + share * hg_dr(dr.dot(-om, _vec(c)), g_l)
         # a face of the box facing om, chosen by projected area, and a uniform point on it
@@ -254,6 +262,8 @@ class SkySource:
         eps = 1e-4 * float(np.linalg.norm(ext))
         o = mi.Point3f(x, y, z) + om * eps
         d = -om
+        if self.ground is not None:
+            rad[3] = rad[3] * dr.exp(-float(light.extinction) * med.ground_sun_depth(o, om))
         base = a_proj / (pdf * n)
         return mi.Point3f(o), mi.Vector3f(d), [r * base for r in rad]
 

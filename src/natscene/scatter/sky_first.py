@@ -15,7 +15,8 @@ The dome's light scattered once toward the camera at x is (Eq. 5's in-scatter wi
     S_1(x) = ∫ L(-ω) exp(-sigma_t k D(x, -ω)) p(ω · ω_cam(x), g) dω,
 
 ω the light's direction of travel, L(-ω) the radiance arriving from -ω in the four sky channels (the dome's R, G, B
-above the horizon, the unit-radiance ground below: :class:`natscene.scatter.photons.SkySource`), D(x, -ω) = ∫ rho ds
+above the horizon, the unit-radiance ground below, or a frame's ground in the cloud's shadow:
+:class:`natscene.scatter.photons.SkySource`, :class:`natscene.scatter.skylight.GroundLight`), D(x, -ω) = ∫ rho ds
 from x back to the box toward the source and ω_cam(x) the unit vector from x toward the camera. Each point draws ω
 from a mixture q (multiple importance sampling, the balance heuristic: Veach & Guibas 1995) of the g grid's HG
 lobes around ω_cam(x) (the phase function's forward peak, which at g 0.9 is about ±10° wide: the dome's own
@@ -72,6 +73,8 @@ class ShadowSamples:
     inv_q: np.ndarray           # (N,) 1 / the mixture's pdf of ω
     radiance: np.ndarray        # (4, N) radiance arriving from -ω: dome R, G, B, ground
     cells: tuple                # (cz, cy, cx)
+    depth_ground: np.ndarray | None = None   # (N,) D toward the sun from the ground point behind -ω (a shadowed
+                                             # ground, :class:`natscene.scatter.skylight.GroundLight`), else None
 
 
 def _occupied_cells(density: np.ndarray, factor: int) -> np.ndarray:
@@ -92,13 +95,15 @@ def _dome_cell(dome, src: np.ndarray) -> tuple:
     return src[:, 1] > 0, it * n_p + ip
 
 
-def _dome_radiance(dome, src: np.ndarray) -> np.ndarray:
+def _dome_radiance(dome, src: np.ndarray, ground_sky=None) -> np.ndarray:
     """(4, N) radiance arriving from the unit directions ``src`` (toward the source): the dome's table above the
-    horizon, the unit ground below."""
+    horizon, the unit ground below (and the ground's skylit radiance ``ground_sky`` (3,) in R, G, B, if given: the
+    shadowed ground of :class:`natscene.scatter.photons.SkySource`)."""
     up, cell = _dome_cell(dome, src)
     rgb = np.asarray(dome.rgb, np.float64).reshape(-1, 3)
+    below = np.zeros(3) if ground_sky is None else np.asarray(ground_sky, np.float64).reshape(3)
     out = np.zeros((4, src.shape[0]), np.float32)
-    out[:3] = np.where(up, rgb[cell].T, 0.0)
+    out[:3] = np.where(up, rgb[cell].T, below[:, None])
     out[3] = np.where(up, 0.0, 1.0)
     return out
 
@@ -166,6 +171,7 @@ def shadow_samples(med, depth_vox: np.ndarray, camera_position, sky, gs, factor:
     rng = np.random.default_rng(seed)
     gs = np.asarray(gs, np.float64)
     dome, table = sky.dome, (sky.p_ground, sky.p_cell, sky.cdf)
+    ground_sky = None if sky.ground is None else sky.ground[0].sky
     vox = (med.bbox_max - med.bbox_min) / np.array([nx, ny, nz])
     cam = np.asarray(camera_position, np.float64)
     tex = depth_texture(depth_vox)
@@ -201,14 +207,18 @@ def shadow_samples(med, depth_vox: np.ndarray, camera_position, sky, gs, factor:
         dr.eval(dl, rho, dc)
         # compact: 28 bytes a point (the cosine and the depths in float32, where the forward peak and the
         # transmittance need the digits)
-        parts.append(dict(index=(half * (cz * cy * cx) + c).astype(np.int32), rho=np.asarray(rho, np.float16),
-                          depth_camera=np.asarray(dc, np.float32), depth_light=np.asarray(dl, np.float32),
-                          cos_camera=cos_cam.astype(np.float32), inv_q=(1.0 / q).astype(np.float16),
-                          radiance=_dome_radiance(dome, src).astype(np.float16)))
+        part = dict(index=(half * (cz * cy * cx) + c).astype(np.int32), rho=np.asarray(rho, np.float16),
+                    depth_camera=np.asarray(dc, np.float32), depth_light=np.asarray(dl, np.float32),
+                    cos_camera=cos_cam.astype(np.float32), inv_q=(1.0 / q).astype(np.float16),
+                    radiance=_dome_radiance(dome, src, ground_sky).astype(np.float16))
+        if ground_sky is not None:
+            part["depth_ground"] = np.asarray(med.ground_sun_depth(o, s), np.float32)
+        parts.append(part)
     cat = {k: np.concatenate([pt[k] for pt in parts], axis=-1) for k in parts[0]} if parts else None
     if cat is None:
         z = np.zeros(0, np.float32)
-        return ShadowSamples(np.zeros(0, np.int32), z, z, z, z, z, np.zeros((4, 0), np.float32), (cz, cy, cx))
+        return ShadowSamples(np.zeros(0, np.int32), z, z, z, z, z, np.zeros((4, 0), np.float32), (cz, cy, cx),
+                             None if ground_sky is None else z)
     return ShadowSamples(cells=(cz, cy, cx), **cat)
 
 
@@ -231,7 +241,10 @@ def first_order_numerators(samples: ShadowSamples, sig_k: float, g: float, weigh
                * samples.inv_q[part].astype(np.float64))
         den += np.bincount(idx, wr, minlength=2 * n)
         for ch in range(4):
-            num[ch] += np.bincount(idx, val * samples.radiance[ch, part].astype(np.float64), minlength=2 * n)
+            rad = samples.radiance[ch, part].astype(np.float64)
+            if ch == 3 and samples.depth_ground is not None:      # the ground in the cloud's shadow
+                rad = rad * np.exp(-sig_k * samples.depth_ground[part].astype(np.float64))
+            num[ch] += np.bincount(idx, val * rad, minlength=2 * n)
     out = np.divide(num, den, out=np.zeros_like(num), where=den > 0)
     q = np.asarray(weighted_integrals, np.float64).ravel()
     return (out.reshape(4, 2, n) * q).transpose(1, 0, 2).reshape(2, 4, cz, cy, cx)

@@ -8,6 +8,7 @@ limit):
 -   :class:`Dome`, :func:`cell_directions`: the dome's radiance table and its cells' directions.
 -   :func:`daylight_dome`: the Preetham sky of a sun direction; :func:`uniform_dome`: a uniform dome.
 -   :func:`irradiance`, :func:`ground_radiance`: the horizontal irradiance and the ground's radiance.
+-   :class:`GroundLight`: a frame's ground in the cloud's shadow.
 -   :func:`calibration`: the per-channel factors that give the dome the photo's mean sky radiance.
 
 The dome is a table of radiance over the upper hemisphere (cells uniform in cos(zenith) and azimuth, so all
@@ -22,7 +23,11 @@ of sky around the clouds while the cloud is lit by the whole dome, most of it (t
 aureole, the horizon) outside the frame; the analytic dome follows the sun and its turbidity. The photo
 fixes its level and colour: each channel is scaled so that the dome, seen through the view's camera, has
 the photo's mean L_sky (:func:`calibration`). The ground radiance is albedo / π times the horizontal
-irradiance of the sun and the sky (a Lambertian ground in the open).
+irradiance of the sun and the sky (a Lambertian ground in the open). A shot's frame knows its sun and sky
+when it traces, so its ground lies in the cloud's shadow (:class:`GroundLight`): the ground channel carries the
+ground's sunlit part, weighted by the sun's transmittance through the cloud from the ground point
+(:meth:`natscene.scatter.medium.Medium.ground_sun_depth`), and the ground's skylit part joins the R, G, B channels.
+The precompute keeps the open ground: the fit sets the sun's and the sky's levels after it.
 
 References
 ----------
@@ -38,8 +43,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["Dome", "cell_directions", "daylight_dome", "uniform_dome", "irradiance", "ground_radiance",
-           "calibration"]
+__all__ = ["Dome", "GroundLight", "cell_directions", "daylight_dome", "uniform_dome", "irradiance",
+           "ground_radiance", "calibration"]
 
 
 @dataclass
@@ -54,6 +59,19 @@ class Dome:
     def cell_solid_angle(self) -> float:
         n_t, n_p = self.rgb.shape[:2]
         return 2.0 * np.pi / (n_t * n_p)
+
+
+@dataclass
+class GroundLight:
+    """A frame's ground in the cloud's shadow: ``sky`` (3,) the ground's radiance under the sky alone
+    (:func:`ground_radiance` of the sky's irradiance), ``extinction`` the cloud's mu_t per unit density
+    (sigma_t x extinction_scale, 1/m). The ground channel then carries exp(-extinction D(x_g)) per unit sunlit
+    ground radiance, x_g the ground point the light leaves (:meth:`natscene.scatter.medium.Medium.ground_sun_depth`),
+    and the R, G, B channels the ground's ``sky`` radiance: the ground under the cloud is lit by the sky only. The
+    sky's own light on the ground is not shadowed (the cloud hides a part of the dome from the ground under it)."""
+
+    sky: np.ndarray
+    extinction: float
 
 
 def cell_directions(n_theta: int, n_phi: int) -> np.ndarray:

@@ -23,7 +23,11 @@ transport traces every order of the sun's light and of a sky dome's (:mod:`natsc
 with the sky dome's R, G, B channels and a unit-radiance ground, c_b(beta) the bands' albedo weights, a the dome's
 calibration to the photo (:func:`natscene.scatter.skylight.calibration`), E_dome its horizontal irradiance and G
 the radiance of a Lambertian ground of ``ground_albedo``; interpolated bilinearly in the extinction and g between
-the tables' nodes. The GA searches L_in, g, the extinction and beta; the skylight replaces L_amb.
+the tables' nodes. The GA searches L_in, g, the extinction and beta; the skylight replaces L_amb. A frame's
+direct render (:meth:`AllOrders.render`) knows its sun and sky as it traces, and puts its ground in the cloud's
+shadow (:class:`natscene.scatter.skylight.GroundLight`): the ground's skylit part albedo / π E_dome joins the
+R, G, B channels, and T^{ground} carries the ground's sunlit part, each ground point's light weighted by the sun's
+transmittance through the cloud to it, composed with G_sun = albedo / π L_in c_in sin(el_sun).
 
 References
 ----------
@@ -522,14 +526,19 @@ class AllOrders(Transport):
         sky_settings, ground_albedo = o.sky_settings, o.ground_albedo
         comps = {}
         from natscene.scatter.allorders import Lighting, Scene, view_images
-        from natscene.scatter.skylight import ground_radiance, irradiance
+        from natscene.scatter.skylight import GroundLight, ground_radiance, irradiance
         st = o.all_orders
+        albedo = np.broadcast_to(np.asarray(ground_albedo, np.float64), (3,))
+        ground = None
         if skylight:
             dome = dome if dome is not None else frame_dome(med.sun_dir, sky_settings)
+            # the ground in the cloud's shadow: its skylit part joins the dome's channels, its sunlit part (G_sun
+            # below) is the ground channel, weighted by the sun's transmittance to the ground point
+            ground = GroundLight(ground_radiance(albedo, 0.0, irradiance(dome)), sigma * volume.extinction_scale)
         else:
             dome = None
         # another seed, another run (the shadow rays' too); the medium is the frame's own
-        scene = Scene(volume, Lighting(med.sun_dir, dome), st, shadow_seed=seed, med=med)
+        scene = Scene(volume, Lighting(med.sun_dir, dome, ground), st, shadow_seed=seed, med=med)
         vi = view_images(scene, camera, sigma, g, seed=seed, halves=False)       # a frame needs no noise figure
         a_s = L_in * beta * hg(cos_t, g) * single["S_sun"][0]
         a_m = L_in * np.tensordot(band_weights(st.sun_bands, vi.sun_orders, beta)[0], vi.sun, 1)
@@ -538,10 +547,9 @@ class AllOrders(Transport):
             ck = band_weights(st.sky_bands, vi.sky_orders, beta)[0]
             sky_bands = np.tensordot(ck, np.moveaxis(vi.sky, 1, 0), 1)          # (4, H, W)
             sin_el = max(float(med.sun_dir[1]), 0.0)
-            G = ground_radiance(np.broadcast_to(np.asarray(ground_albedo, np.float64), (3,)),
-                                L_in * c_in * sin_el, irradiance(dome))
+            G_sun = ground_radiance(albedo, L_in * c_in * sin_el, 0.0)
             L_sky_lit = (np.moveaxis(sky_bands[:3], 0, -1)
-                         + sky_bands[3][..., None] * G[None, None, :].astype(np.float32))
+                         + sky_bands[3][..., None] * G_sun[None, None, :].astype(np.float32))
         L_s = a_s[..., None].astype(np.float32) * c_in
         L_m = a_m[..., None].astype(np.float32) * c_in
         comps.update(L_sky_lit=L_sky_lit.astype(np.float32), photons=vi.stats)
