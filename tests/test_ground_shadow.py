@@ -40,23 +40,23 @@ def _box(lo, hi, shape, margin: int = 2):
     return Volume(d, lo, hi, 1.0), (lo + margin * vox, hi - margin * vox)
 
 
-def _chord(x: np.ndarray, s: np.ndarray, lo, hi) -> np.ndarray:
-    """Length of the ray x + t s (t >= 0) inside the box [lo, hi], rows of x."""
+def _slab(x: np.ndarray, s: np.ndarray, lo, hi) -> tuple:
+    """(near, far): where the rays x + t s (t >= 0, rows of x) enter and leave the box [lo, hi] (the slab test)."""
     with np.errstate(divide="ignore", invalid="ignore"):
         t0 = (np.asarray(lo) - x) / s
         t1 = (np.asarray(hi) - x) / s
-    near = np.maximum(np.nanmax(np.minimum(t0, t1), axis=1), 0.0)
-    far = np.nanmin(np.maximum(t0, t1), axis=1)
+    return np.maximum(np.nanmax(np.minimum(t0, t1), axis=1), 0.0), np.nanmin(np.maximum(t0, t1), axis=1)
+
+
+def _chord(x: np.ndarray, s: np.ndarray, lo, hi) -> np.ndarray:
+    """Length of the rays x + t s (t >= 0, rows of x) inside the box [lo, hi]."""
+    near, far = _slab(x, s, lo, hi)
     return np.maximum(far - near, 0.0)
 
 
 def _depth_at_entry(med, x: np.ndarray, s: np.ndarray) -> np.ndarray:
-    """The medium's D at the points where the rays x + t s enter its box (numpy slab test), 0 where they miss."""
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t0 = (med.bbox_min - x) / s
-        t1 = (med.bbox_max - x) / s
-    near = np.maximum(np.nanmax(np.minimum(t0, t1), axis=1), 0.0)
-    far = np.nanmin(np.maximum(t0, t1), axis=1)
+    """The medium's D at the points where the rays x + t s enter its box, 0 where they miss."""
+    near, far = _slab(x, s, med.bbox_min, med.bbox_max)
     e = x + s * (near + 1e-3 * med.voxel)[:, None]
     return np.where(far > near, np.asarray(med.sun_depth(_dr3(e, mi.Point3f)), np.float64), 0.0)
 

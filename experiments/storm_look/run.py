@@ -39,6 +39,7 @@ from natscene.variant import select_variant  # noqa: E402
 from natscene.volume.grid import load_volume  # noqa: E402
 from shots import shot_state  # noqa: E402
 
+
 def look(img: np.ndarray, opacity: np.ndarray) -> dict:
     """Luminance statistics of the opaque cloud pixels (above)."""
     y = luminance(img[..., :3])
