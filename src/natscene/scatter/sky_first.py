@@ -205,8 +205,8 @@ def shadow_samples(med, depth_vox: np.ndarray, camera_position, sky, gs, factor:
         rho = med.rho(o)
         dc = tex.eval(uvw)[0]
         dr.eval(dl, rho, dc)
-        # compact: 28 bytes a point (the cosine and the depths in float32, where the forward peak and the
-        # transmittance need the digits)
+        # compact: 28 bytes a point, 32 with the ground's depth in a frame (the cosine and the depths in float32,
+        # where the forward peak and the transmittance need the digits)
         part = dict(index=(half * (cz * cy * cx) + c).astype(np.int32), rho=np.asarray(rho, np.float16),
                     depth_camera=np.asarray(dc, np.float32), depth_light=np.asarray(dl, np.float32),
                     cos_camera=cos_cam.astype(np.float32), inv_q=(1.0 / q).astype(np.float16),

@@ -1,0 +1,64 @@
+"""The cloud's shadow on the ground in a volume dense up to its box's faces: the medium's D against the chord.
+
+``Medium.ground_sun_depth`` gives a ground point the sun's optical depth D(x_e) at the point x_e where the sun's ray
+from it enters the volume's box (:mod:`natscene.scatter.medium`). In a box of density 1 (16 voxels a side, dense up to
+its faces) that depth is the length of the chord the ray cuts through the box (the slab test, in numpy here). Where
+the ray leaves the box near an edge, D is the smaller of the two faces' distances (a ridge across the box), and the
+voxel-centred D interpolated across it reads low. For each sun (elevation 10, 30, 60; azimuth 0, 30, 45) it prints
+the ratio D / chord over 200,000 ground points whose ray crosses at least one voxel: the worst ray, the lowest 1 %
+and the median, and where the worst ray enters.
+
+    .venv/bin/python experiments/sun_depth_edges/run.py
+"""
+import math
+
+import numpy as np
+
+import natscene  # noqa: F401  (before drjit: the LLVM backend's library)
+import mitsuba as mi
+
+from natscene.scatter.medium import make_medium
+from natscene.variant import select_variant
+from natscene.volume.grid import Volume
+
+LO, HI = np.array([-8.0, 2.0, -8.0]), np.array([8.0, 18.0, 8.0])
+
+
+def sun_vector(azimuth: float, elevation: float) -> np.ndarray:
+    a, e = math.radians(azimuth), math.radians(elevation)
+    return np.array([math.cos(e) * math.sin(a), math.sin(e), math.cos(e) * math.cos(a)])
+
+
+def chord(x: np.ndarray, s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(length inside the box, entry distance) of the rays x + t s."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t0, t1 = (LO - x) / s, (HI - x) / s
+    near = np.maximum(np.nanmax(np.minimum(t0, t1), axis=1), 0.0)
+    far = np.nanmin(np.maximum(t0, t1), axis=1)
+    return np.maximum(far - near, 0.0), near
+
+
+def main():
+    select_variant()
+    rng = np.random.default_rng(0)
+    n = 200_000
+    xg = np.stack([rng.uniform(-80, 80, n), np.zeros(n), rng.uniform(-80, 80, n)], 1)
+    box = Volume(np.ones((16, 16, 16), np.float32), LO, HI, 1.0)
+    p = mi.Point3f(xg[:, 0].astype(np.float32), np.full(n, 0.5, np.float32), xg[:, 2].astype(np.float32))
+    down = mi.Vector3f(0.0, -1.0, 0.0)
+    print("elevation azimuth  worst  lowest 1 %  median  worst ray enters at")
+    for el in (10, 30, 60):
+        for az in (0, 30, 45):
+            s = sun_vector(az, el)
+            depth = np.asarray(make_medium(box, s).ground_sun_depth(p, down), np.float64)
+            length, near = chord(xg, s)
+            ok = length > 1.0
+            r = depth[ok] / length[ok]
+            with np.errstate(invalid="ignore"):
+                entry = (xg + s * near[:, None])[ok][np.argmin(r)]
+            print(f"{el:9d} {az:7d} {r.min():6.3f} {np.percentile(r, 1):11.3f} {np.median(r):7.4f}  "
+                  f"{np.round(entry, 2)}")
+
+
+if __name__ == "__main__":
+    main()
