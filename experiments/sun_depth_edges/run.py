@@ -32,13 +32,13 @@ def sun_vector(azimuth: float, elevation: float) -> np.ndarray:
     return np.array([math.cos(e) * math.sin(a), math.sin(e), math.cos(e) * math.cos(a)])
 
 
-def chord(x: np.ndarray, s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(length inside the box, entry distance) of the rays x + t s."""
+def chord(x: np.ndarray, s: np.ndarray) -> np.ndarray:
+    """Length of the rays x + t s (t >= 0) inside the box."""
     with np.errstate(divide="ignore", invalid="ignore"):
         t0, t1 = (LO - x) / s, (HI - x) / s
     near = np.maximum(np.nanmax(np.minimum(t0, t1), axis=1), 0.0)
     far = np.nanmin(np.maximum(t0, t1), axis=1)
-    return np.maximum(far - near, 0.0), near
+    return np.maximum(far - near, 0.0)
 
 
 def medium(box: Volume, sun: np.ndarray, voxel_centred: bool):
@@ -65,7 +65,7 @@ def main():
         for az in (0, 30, 45):
             s = sun_vector(az, el)
             depth = np.asarray(medium(box, s, args.voxel_centred).ground_sun_depth(p, down), np.float64)
-            length, _ = chord(xg, s)
+            length = chord(xg, s)
             ok = length > 1.0
             r = depth[ok] / length[ok]
             print(f"{el:9d} {az:7d} {r.min():7.3f} {r.max():8.3f} {np.percentile(r, 1):11.3f} {np.median(r):7.4f}")
