@@ -73,7 +73,7 @@ def main() -> None:
     for node in a.nodes:
         ext, g = (float(x) for x in node.split(","))
         sigma = ext / vol.extinction_scale
-        vint = weighted_voxel_integrals(scene.med, depth, sigma * vol.extinction_scale)
+        vint = weighted_voxel_integrals(scene.med, depth, cam.position, sigma * vol.extinction_scale)
         q = scene.weighted_integrals(vint, sigma, f)
         win = weight_window(scene, sky, sigma, g, cam, 7919) if st.importance else None
         n = photons_for(scene, sky, sigma, g, cam, int(st.sky_collisions * a.scale), 10 ** 9, 7919,

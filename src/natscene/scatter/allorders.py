@@ -512,7 +512,7 @@ def view_images(scene: Scene, camera, sigma: float, g: float, seed: int = 0, noi
                           None if sky is None else order_distribution(st.sky_bands, np.zeros(0)), {})
     from natscene.scatter.inscatter import weighted_voxel_integrals
     depth = scene.camera_depth_voxels(camera)
-    vint = weighted_voxel_integrals(scene.med, depth, sigma * scene.volume.extinction_scale)
+    vint = weighted_voxel_integrals(scene.med, depth, camera.position, sigma * scene.volume.extinction_scale)
     win = weight_window(scene, scene.sun, sigma, g, camera, seed) if st.importance else None
     n_sun = photons_for(scene, scene.sun, sigma, g, camera, st.sun_collisions, 10 ** 9, seed,
                         most=st.sun_photons_max, window=win, pilot=16384 if win else 32768)

@@ -319,11 +319,11 @@ def _new_direction(lobe_on: bool, w, p, g, rng, share, cam, vis_p):
 
 def _visibility(vis, p, lo, ext):
     """The visibility weight w(p) (:func:`natscene.scatter.inscatter.visibility`); 1 without a camera depth.
-    ``vis``: (depth texture, sig_k) or None."""
+    ``vis``: (:class:`natscene.scatter.inscatter.CameraDepth`, sig_k) or None."""
     if vis is None:
         return mi.Float(1.0)
     from natscene.scatter.inscatter import visibility
-    return visibility(vis[0], (p - lo) / ext, vis[1])
+    return visibility(vis[0], p, (p - lo) / ext, vis[1])
 
 
 #: the fields of a photon record (a photon about to fly: from the source, or a split copy at a collision)
@@ -593,8 +593,8 @@ def trace(med, grid: MajorantGrid, source, sigma: float, g: float, camera_positi
     nb = len(bands)
     vis = None
     if camera_depth is not None:
-        from natscene.scatter.inscatter import depth_texture
-        vis = (depth_texture(camera_depth), dr.opaque(mi.Float, float(sigma) * med.scale))
+        from natscene.scatter.inscatter import CameraDepth
+        vis = (CameraDepth(med, camera_depth, camera_position), dr.opaque(mi.Float, float(sigma) * med.scale))
     band_sets, geo, slot_np = [], [], []
     owner = -np.ones(nb, np.int64)
     for ci, (factor, sel) in enumerate(caches):

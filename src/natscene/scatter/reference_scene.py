@@ -14,6 +14,10 @@ render and the scene it belongs to cannot drift apart.
   the stored renders (sun only: :data:`NOSKY`), :data:`SETTINGS` the all-orders settings they are compared at;
 - :func:`volpath_references`: the stored renders by (sigma_t, g, beta);
 - :func:`slab_volume`, :func:`slab_camera`: a homogeneous plane-parallel slab and a far camera on it;
+- :func:`slab_layers`, :func:`slab_sun_radiance`: the slab of the adding-doubling comparisons
+  (``tests/test_slab.py``) and the transport's radiance in its middle under the sun;
+- :func:`adding_doubling`, :func:`adding_doubling_flux`: that slab's reflection and transmission by adding-doubling
+  (van de Hulst's method in Prahl's ``iadpython``, a test dependency: ``pip install -e .[test]``);
 - :func:`block_ratios`: the 8x8 block-sum ratios of the block criterion (Dobashi-style tables against a reference);
 - :data:`OPACITY_BANDS`, :func:`band_ratios`: the opacity bands of the accuracy-by-band criterion (issue 39: the
   ratio to ``volpath`` within 3 % in each band, where the cache cells' bias shows in the thin edges) and the
@@ -31,7 +35,8 @@ from natscene.scatter.allorders import AllOrdersSettings
 from natscene.volume.grid import Volume, placement
 
 __all__ = ["SUN", "CAM", "SIGMAS", "GS", "BETAS", "NOSKY", "K", "SETTINGS", "blob_volume", "volpath_references",
-           "slab_volume", "slab_camera", "block_ratios", "OPACITY_BANDS", "band_ratios"]
+           "slab_volume", "slab_camera", "slab_layers", "slab_sun_radiance", "SLAB_VIEW", "adding_doubling",
+           "adding_doubling_flux", "block_ratios", "OPACITY_BANDS", "band_ratios"]
 
 SUN = np.array([0.5, 0.6, 0.3]) / np.linalg.norm([0.5, 0.6, 0.3])
 CAM = Camera((0.0, 0.25, -1.8), (0.0, 0.28, 0.0), (0.0, 1.0, 0.0), fov=30, width=48, height=36)
@@ -69,12 +74,79 @@ def slab_volume(tau: float = 2.0, n: tuple = (96, 16, 96), width: float = 40.0) 
     return Volume(np.ones((nz, ny, nx), np.float32), lo, hi, tau)
 
 
-def slab_camera(mu: float, above: bool = True, distance: float = 400.0, res: int = 16) -> Camera:
-    """A far camera looking at the slab's centre from direction cos(zenith) = mu (azimuth +x)."""
+def slab_camera(mu: float, above: bool = True, distance: float = 400.0, res: int = 16, fov: float = 0.3) -> Camera:
+    """A far camera looking at the slab's centre from direction cos(zenith) = mu (azimuth +x); at the default
+    ``fov`` it sees 2.1 thicknesses of the slab across (its footprint on the slab: 1 / mu times that along x)."""
     s = np.sqrt(max(1 - mu * mu, 0.0))
     d = np.array([s, mu if above else -mu, 0.0])
     centre = np.array([0.0, 0.5, 0.0])
-    return Camera(tuple(centre + distance * d), tuple(centre), (0.0, 0.0, 1.0), fov=0.3, width=res, height=res)
+    return Camera(tuple(centre + distance * d), tuple(centre), (0.0, 0.0, 1.0), fov=fov, width=res, height=res)
+
+
+def slab_layers(tau: float) -> int:
+    """Voxel layers across the slab of the adding-doubling comparisons: at most 2 mean free paths each (a real
+    cloud's voxels are 1-2 at the main job's extinction), at least 16."""
+    return max(16, int(np.ceil(tau / 2)))
+
+
+#: the view of the slab's middle in the sun-lit adding-doubling comparisons: (fov in degrees, pixels across). It
+#: sees 4.2 thicknesses of a slab 12 wide (4.8 along x at 30 degrees from the normal), where one photon run's
+#: in-scatter cells scatter by 0.4 % (tau 10; 1 % in 8 x 8 pixels over 2.1 thicknesses) and the slab's edges, 3.6
+#: thicknesses away, take nothing (0.9 degrees reads the same; 1.5 degrees, edges 1.3 thicknesses away, 3 % less)
+SLAB_VIEW = (0.6, 16)
+
+
+def slab_sun_radiance(tau: float, g: float, sun_zenith: float, mu: float, above: bool, seed: int, settings,
+                      betas=(0.99, 0.9999, 1.0), view: tuple = SLAB_VIEW) -> dict:
+    """pi L / E of the all-orders transport under the sun, per albedo in ``betas``, in the middle of the slab
+    (:func:`slab_volume` 12 times wider than thick, :func:`slab_layers` layers) seen from cos(zenith) ``mu`` above
+    or below it: the sun's order 1 ray-marched, the orders >= 2 from one photon run composed in bands, as the
+    precompute does. The sun is at ``sun_zenith`` degrees, on the side the camera is (azimuth -x to +x)."""
+    from natscene.phase import hg
+    from natscene.scatter.allorders import Lighting, Scene, view_images
+    from natscene.scatter.bands import band_weights
+    from natscene.scatter.single import march_view
+    vol = slab_volume(tau=tau, n=(48, slab_layers(tau), 48), width=12.0)
+    z = np.radians(sun_zenith)
+    sun = np.array([-np.sin(z), np.cos(z), 0.0])
+    cam = slab_camera(mu, above, res=view[1], fov=view[0])
+    scene = Scene(vol, Lighting(sun, None), settings)
+    vi = view_images(scene, cam, 1.0, g, seed=seed)
+    single = hg(cam.ray_directions() @ sun, g) * march_view(scene.med, cam, [1.0])["S_sun"][0]
+    return {b: float(np.pi * (b * single + np.tensordot(band_weights(settings.sun_bands, vi.sun_orders, b)[0],
+                                                        vi.sun, 1)).mean()) for b in betas}
+
+
+def _rt_matrices(tau: float, g: float, beta: float):
+    """Adding-doubling's R(nu_i, nu_j) and diffuse T (the unscattered beam removed) of the index-matched slab, its
+    32 quadrature angles nu and weights 2 nu w."""
+    try:
+        import iadpython as iad
+    except ImportError as e:
+        raise ImportError("the slab's adding-doubling reference needs iadpython: pip install -e .[test]") from e
+    s = iad.Sample(a=beta, b=tau, g=g, d=1.0, n=1.0, n_above=1.0, n_below=1.0, quad_pts=32)
+    R, _, T, _ = s.rt_matrices()
+    nu, w2 = np.asarray(s.nu), np.asarray(s.twonuw)
+    return nu, w2, R, T - np.diag(np.exp(-tau / nu) / w2)
+
+
+def adding_doubling(tau: float, g: float, beta: float, mu0: float, mu: float) -> tuple[float, float]:
+    """pi L / E above and below the slab under a beam at mu0, seen from mu: mu0 R(mu, mu0) and mu0 T(mu, mu0) (the
+    unscattered beam excluded; cubic in the quadrature angles)."""
+    from scipy.interpolate import CubicSpline
+    nu, _, R, T = _rt_matrices(tau, g, beta)
+    out = []
+    for M in (R, T):
+        col = np.array([CubicSpline(nu, M[i])(mu0) for i in range(len(nu))])   # R(nu_i, mu0)
+        out.append(float(mu0 * CubicSpline(nu, col)(mu)))
+    return out[0], out[1]
+
+
+def adding_doubling_flux(tau: float, g: float, beta: float, mu0: float) -> tuple[float, float]:
+    """Reflectance and diffuse transmittance of the slab for a beam at mu0: sum_i 2 nu_i w_i R(nu_i, mu0)."""
+    from scipy.interpolate import CubicSpline
+    nu, w2, R, T = _rt_matrices(tau, g, beta)
+    return float(CubicSpline(nu, w2 @ R)(mu0)), float(CubicSpline(nu, w2 @ T)(mu0))
 
 
 def block_ratios(ours: np.ndarray, ref: np.ndarray, mask: np.ndarray, size: int = 8) -> np.ndarray:
