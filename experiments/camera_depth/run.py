@@ -42,7 +42,8 @@ def main():
         print(f"seed {seed}: " + "  ".join(f"beta {b}: {r:.4f}" for b, r in zip(BETAS, rows[-1])), flush=True)
     r = np.array(rows)
     print("mean " + "  ".join(f"beta {b}: {m:.4f}" for b, m in zip(BETAS, r.mean(0))))
-    print("sd   " + "  ".join(f"beta {b}: {m:.4f}" for b, m in zip(BETAS, r.std(0, ddof=1))))
+    if len(rows) > 1:
+        print("sd   " + "  ".join(f"beta {b}: {m:.4f}" for b, m in zip(BETAS, r.std(0, ddof=1))))
 
 
 if __name__ == "__main__":

@@ -31,7 +31,10 @@ import numpy as np
 
 from natscene.config import default_settings
 from natscene.geometry import Camera
-from natscene.scatter.allorders import AllOrdersSettings
+from natscene.phase import hg
+from natscene.scatter.allorders import AllOrdersSettings, Lighting, Scene, view_images
+from natscene.scatter.bands import band_weights
+from natscene.scatter.single import march_view
 from natscene.volume.grid import Volume, placement
 
 __all__ = ["SUN", "CAM", "SIGMAS", "GS", "BETAS", "NOSKY", "K", "SETTINGS", "blob_volume", "volpath_references",
@@ -102,10 +105,6 @@ def slab_sun_radiance(tau: float, g: float, sun_zenith: float, mu: float, above:
     (:func:`slab_volume` 12 times wider than thick, :func:`slab_layers` layers) seen from cos(zenith) ``mu`` above
     or below it: the sun's order 1 ray-marched, the orders >= 2 from one photon run composed in bands, as the
     precompute does. The sun is at ``sun_zenith`` degrees, on the side the camera is (azimuth -x to +x)."""
-    from natscene.phase import hg
-    from natscene.scatter.allorders import Lighting, Scene, view_images
-    from natscene.scatter.bands import band_weights
-    from natscene.scatter.single import march_view
     vol = slab_volume(tau=tau, n=(48, slab_layers(tau), 48), width=12.0)
     z = np.radians(sun_zenith)
     sun = np.array([-np.sin(z), np.cos(z), 0.0])
