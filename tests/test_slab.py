@@ -33,7 +33,7 @@ from natscene.config import default_settings
 from natscene.scatter.allorders import AllOrdersSettings, Lighting, Scene, view_images
 from natscene.scatter.bands import band_weights
 from natscene.scatter.reference_scene import (adding_doubling, adding_doubling_flux, slab_camera, slab_layers,
-                                              slab_sun_radiance, slab_volume)
+                                              slab_sun, slab_sun_radiance, slab_volume)
 from natscene.scatter.skylight import uniform_dome
 
 TAUS = (1.0, 10.0, 100.0, 300.0)
@@ -54,18 +54,13 @@ FLUX_VIEW = (0.3, 8)
 ABS_FLOOR = 1e-3
 
 
-def sun_vector(zenith_deg: float) -> np.ndarray:
-    z = np.radians(zenith_deg)
-    return np.array([-np.sin(z), np.cos(z), 0.0])        # toward the sun; the views' azimuth is +x
-
-
 def dome_radiance(tau: float, g: float, mu: float, above: bool, seeds) -> dict:
     """L / L_sky of the transport's skylight (orders >= 1) under a uniform sky above the slab, per beta: the mean
     of runs with ``seeds``. The 8 x 8 pixels see a small patch of the slab, where one run of the higher orders'
     photons scatters by about 3 % (eight runs at tau 10: 0.97-1.05 of adding-doubling)."""
     vol = slab_volume(tau=tau, n=(48, slab_layers(tau), 48), width=12.0)
     cam = slab_camera(mu, above, res=8)
-    scene = Scene(vol, Lighting(sun_vector(0.0), uniform_dome(1.0)), DOME)
+    scene = Scene(vol, Lighting(slab_sun(0.0), uniform_dome(1.0)), DOME)
     out = {b: 0.0 for b in BETAS}
     for seed in seeds:
         vi = view_images(scene, cam, 1.0, g, seed=seed)

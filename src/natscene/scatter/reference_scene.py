@@ -14,7 +14,7 @@ render and the scene it belongs to cannot drift apart.
   the stored renders (sun only: :data:`NOSKY`), :data:`SETTINGS` the all-orders settings they are compared at;
 - :func:`volpath_references`: the stored renders by (sigma_t, g, beta);
 - :func:`slab_volume`, :func:`slab_camera`: a homogeneous plane-parallel slab and a far camera on it;
-- :func:`slab_layers`, :func:`slab_sun_radiance`: the slab of the adding-doubling comparisons
+- :func:`slab_layers`, :func:`slab_sun`, :func:`slab_sun_radiance`: the slab of the adding-doubling comparisons
   (``tests/test_slab.py``) and the transport's radiance in its middle under the sun;
 - :func:`adding_doubling`, :func:`adding_doubling_flux`: that slab's reflection and transmission by adding-doubling
   (van de Hulst's method in Prahl's ``iadpython``, a test dependency: ``pip install -e .[test]``);
@@ -38,8 +38,8 @@ from natscene.scatter.single import march_view
 from natscene.volume.grid import Volume, placement
 
 __all__ = ["SUN", "CAM", "SIGMAS", "GS", "BETAS", "NOSKY", "K", "SETTINGS", "blob_volume", "volpath_references",
-           "slab_volume", "slab_camera", "slab_layers", "slab_sun_radiance", "SLAB_VIEW", "adding_doubling",
-           "adding_doubling_flux", "block_ratios", "OPACITY_BANDS", "band_ratios"]
+           "slab_volume", "slab_camera", "slab_layers", "slab_sun", "slab_sun_radiance", "SLAB_VIEW",
+           "adding_doubling", "adding_doubling_flux", "block_ratios", "OPACITY_BANDS", "band_ratios"]
 
 SUN = np.array([0.5, 0.6, 0.3]) / np.linalg.norm([0.5, 0.6, 0.3])
 CAM = Camera((0.0, 0.25, -1.8), (0.0, 0.28, 0.0), (0.0, 1.0, 0.0), fov=30, width=48, height=36)
@@ -99,15 +99,21 @@ def slab_layers(tau: float) -> int:
 SLAB_VIEW = (0.6, 16)
 
 
+def slab_sun(zenith_deg: float) -> np.ndarray:
+    """The unit vector toward a sun ``zenith_deg`` degrees from the slab's normal, on the side of
+    :func:`slab_camera`'s views (azimuth +x)."""
+    z = np.radians(zenith_deg)
+    return np.array([-np.sin(z), np.cos(z), 0.0])
+
+
 def slab_sun_radiance(tau: float, g: float, sun_zenith: float, mu: float, above: bool, seed: int, settings,
                       betas=(0.99, 0.9999, 1.0), view: tuple = SLAB_VIEW) -> dict:
     """pi L / E of the all-orders transport under the sun, per albedo in ``betas``, in the middle of the slab
     (:func:`slab_volume` 12 times wider than thick, :func:`slab_layers` layers) seen from cos(zenith) ``mu`` above
     or below it: the sun's order 1 ray-marched, the orders >= 2 from one photon run composed in bands, as the
-    precompute does. The sun is at ``sun_zenith`` degrees, on the side the camera is (azimuth -x to +x)."""
+    precompute does. The sun is :func:`slab_sun` at ``sun_zenith`` degrees."""
     vol = slab_volume(tau=tau, n=(48, slab_layers(tau), 48), width=12.0)
-    z = np.radians(sun_zenith)
-    sun = np.array([-np.sin(z), np.cos(z), 0.0])
+    sun = slab_sun(sun_zenith)
     cam = slab_camera(mu, above, res=view[1], fov=view[0])
     scene = Scene(vol, Lighting(sun, None), settings)
     vi = view_images(scene, cam, 1.0, g, seed=seed)
