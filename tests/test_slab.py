@@ -32,8 +32,8 @@ import natscene  # noqa: F401
 from natscene.config import default_settings
 from natscene.scatter.allorders import AllOrdersSettings, Lighting, Scene, view_images
 from natscene.scatter.bands import band_weights
-from natscene.scatter.reference_scene import (adding_doubling, adding_doubling_flux, slab_camera, slab_layers,
-                                              slab_sun, slab_sun_radiance, slab_volume)
+from natscene.scatter.reference_scene import (adding_doubling, adding_doubling_flux, comparison_slab, slab_camera,
+                                              slab_sun, slab_sun_radiance)
 from natscene.scatter.skylight import uniform_dome
 
 TAUS = (1.0, 10.0, 100.0, 300.0)
@@ -58,7 +58,7 @@ def dome_radiance(tau: float, g: float, mu: float, above: bool, seeds) -> dict:
     """L / L_sky of the transport's skylight (orders >= 1) under a uniform sky above the slab, per beta: the mean
     of runs with ``seeds``. The 8 x 8 pixels see a small patch of the slab, where one run of the higher orders'
     photons scatters by about 3 % (eight runs at tau 10: 0.97-1.05 of adding-doubling)."""
-    vol = slab_volume(tau=tau, n=(48, slab_layers(tau), 48), width=12.0)
+    vol = comparison_slab(tau)
     cam = slab_camera(mu, above, res=8)
     scene = Scene(vol, Lighting(slab_sun(0.0), uniform_dome(1.0)), DOME)
     out = {b: 0.0 for b in BETAS}

@@ -14,7 +14,8 @@ render and the scene it belongs to cannot drift apart.
   the stored renders (sun only: :data:`NOSKY`), :data:`SETTINGS` the all-orders settings they are compared at;
 - :func:`volpath_references`: the stored renders by (sigma_t, g, beta);
 - :func:`slab_volume`, :func:`slab_camera`: a homogeneous plane-parallel slab and a far camera on it;
-- :func:`slab_layers`, :func:`slab_sun`, :func:`slab_sun_radiance`: the slab of the adding-doubling comparisons
+- :func:`slab_layers`, :func:`comparison_slab`, :func:`slab_sun`, :func:`slab_sun_radiance`: the slab of the
+  adding-doubling comparisons
   (``tests/test_slab.py``) and the transport's radiance in its middle under the sun;
 - :func:`adding_doubling`, :func:`adding_doubling_flux`: that slab's reflection and transmission by adding-doubling
   (van de Hulst's method in Prahl's ``iadpython``, a test dependency: ``pip install -e .[test]``);
@@ -38,7 +39,7 @@ from natscene.scatter.single import march_view
 from natscene.volume.grid import Volume, placement
 
 __all__ = ["SUN", "CAM", "SIGMAS", "GS", "BETAS", "NOSKY", "K", "SETTINGS", "blob_volume", "volpath_references",
-           "slab_volume", "slab_camera", "slab_layers", "slab_sun", "slab_sun_radiance", "SLAB_VIEW",
+           "slab_volume", "slab_camera", "slab_layers", "comparison_slab", "slab_sun", "slab_sun_radiance", "SLAB_VIEW",
            "adding_doubling", "adding_doubling_flux", "block_ratios", "OPACITY_BANDS", "band_ratios"]
 
 SUN = np.array([0.5, 0.6, 0.3]) / np.linalg.norm([0.5, 0.6, 0.3])
@@ -92,6 +93,11 @@ def slab_layers(tau: float) -> int:
     return max(16, int(np.ceil(tau / 2)))
 
 
+def comparison_slab(tau: float) -> Volume:
+    """The slab of the adding-doubling comparisons: 12 times wider than thick, :func:`slab_layers` layers."""
+    return slab_volume(tau=tau, n=(48, slab_layers(tau), 48), width=12.0)
+
+
 #: the view of the slab's middle in the sun-lit adding-doubling comparisons: (fov in degrees, pixels across). It
 #: sees 4.2 thicknesses of a slab 12 wide (4.8 along x at 30 degrees from the normal), where one photon run's
 #: in-scatter cells scatter by 0.4 % (tau 10; 1 % in 8 x 8 pixels over 2.1 thicknesses) and the slab's edges, 3.6
@@ -109,10 +115,10 @@ def slab_sun(zenith_deg: float) -> np.ndarray:
 def slab_sun_radiance(tau: float, g: float, sun_zenith: float, mu: float, above: bool, seed: int, settings,
                       betas=(0.99, 0.9999, 1.0), view: tuple = SLAB_VIEW) -> dict:
     """pi L / E of the all-orders transport under the sun, per albedo in ``betas``, in the middle of the slab
-    (:func:`slab_volume` 12 times wider than thick, :func:`slab_layers` layers) seen from cos(zenith) ``mu`` above
+    (:func:`comparison_slab`) seen from cos(zenith) ``mu`` above
     or below it: the sun's order 1 ray-marched, the orders >= 2 from one photon run composed in bands, as the
     precompute does. The sun is :func:`slab_sun` at ``sun_zenith`` degrees."""
-    vol = slab_volume(tau=tau, n=(48, slab_layers(tau), 48), width=12.0)
+    vol = comparison_slab(tau)
     sun = slab_sun(sun_zenith)
     cam = slab_camera(mu, above, res=view[1], fov=view[0])
     scene = Scene(vol, Lighting(sun, None), settings)
