@@ -84,3 +84,27 @@ def test_denominator_is_the_mean_weight_of_every_voxel(scale):
             if ref > 1e-6 and abs(got[iz, iy, ix] / ref - 1) > 3e-3:
                 bad.append((iy, ix, iz, round(float(got[iz, iy, ix] / ref), 4)))
     assert not bad, bad
+
+
+def test_steepness_sees_a_face_at_a_grazing_angle():
+    """Seen from 89 degrees, the depth to the top face changes by 1 / cos(zenith) of a voxel across the top voxels
+    (the distance to the face at their top and bottom, numpy), while near the side toward the camera their
+    neighbours' rays leave through that side at much the same depth as theirs through the top: the lookup's change
+    across a voxel is at least the exact depth's wherever that passes EXACT_STEEPNESS[1], so that those voxels take
+    the voxel-centred depth their denominator can integrate (the exact one read 10^18 times too bright there)."""
+    mu, sig_k = np.cos(np.radians(89.17)), 10.0
+    med = make_medium(slab_volume(tau=sig_k, n=(48, 16, 48), width=12.0))
+    cam = np.array([0.0, 1.0, 0.0]) + 400.0 * np.array([np.sqrt(1 - mu * mu), mu, 0.0])
+    cd = CameraDepth(med, voxel_camera_depth(med, cam), cam)
+    h = (med.bbox_max - med.bbox_min) / np.array([48, 16, 48])
+    ix, iz = np.meshgrid(np.arange(48), np.arange(48), indexing="ij")
+    c = med.bbox_min + (np.column_stack([ix.ravel(), np.full(ix.size, 15), iz.ravel()]) + 0.5) * h
+    true = sig_k * np.abs(_to_face(c + [0, h[1] / 2 - 1e-9, 0], cam, med.bbox_min, med.bbox_max)
+                          - _to_face(c - [0, h[1] / 2, 0], cam, med.bbox_min, med.bbox_max))
+    uvw = (c - med.bbox_min) / (med.bbox_max - med.bbox_min)
+    steep = sig_k * np.asarray(cd.parts(mi.Point3f(*[c[:, i].astype(np.float32) for i in range(3)]),
+                                        mi.Point3f(*[uvw[:, i].astype(np.float32) for i in range(3)]))[2], np.float64)
+    hi = EXACT_STEEPNESS[1]
+    assert (true > hi).sum() > 1000
+    miss = (true > hi) & (steep < hi)
+    assert not miss.any(), (int(miss.sum()), c[miss][:3], true[miss][:3], steep[miss][:3])

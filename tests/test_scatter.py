@@ -321,6 +321,25 @@ def test_gather_passes_over_empty_space_exactly():
     np.testing.assert_allclose(skipping, every, rtol=0, atol=1e-6 * float(every.max()))
 
 
+def test_gather_is_bounded_by_the_cells_the_camera_sees():
+    """The view integral of the cache, sum T_prev (1 - e^(-sigma rho h)) S, is at most the largest in-scatter
+    S = C / Q of the cells it interpolates: a cell the camera cannot see (Q = 0) but holding tallies (a grazing
+    view's voxel at a face) adds nothing, instead of C divided by its neighbours' Q, which vanishes toward its centre
+    (10^21 times too bright in a slab seen from 89 degrees)."""
+    from natscene.scatter.inscatter import cache_fields, gather
+    from natscene.scatter.reference_scene import CAM
+    _, med, caches, den = _gather_inputs(2)
+    dead = np.zeros(den.shape, bool)
+    dead[::2, ::2, ::2] = True
+    den = np.where(dead, 0.0, den)
+    caches = np.where(dead, 5.0 * caches.max(), caches)
+    num, q = cache_fields(caches, den)
+    img = gather(med, CAM, 0.5, num, q, 2, 0.5, 1)
+    bound = float((caches[:, ~dead] / den[~dead]).max())
+    assert img.max() > 0.05 * bound
+    assert np.isfinite(img).all() and img.max() <= bound * (1 + 1e-5)
+
+
 def test_gather_marches_once_for_all_its_images():
     """A gather of several images returns each image as gathered alone, from one run of its march: as many kernel
     launches as for one image (``natscene.scatter.rays.pixel_means`` evaluates the march's outputs together; one

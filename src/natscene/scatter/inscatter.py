@@ -133,12 +133,21 @@ class CameraDepth:
             vox = (med.bbox_max - med.bbox_min) / np.array([nx, ny, nz])
             zz, yy, xx = np.meshgrid(*[(np.arange(n) + 0.5) for n in (nz, ny, nx)], indexing="ij")
             pts = med.bbox_min + np.stack([xx.ravel(), yy.ravel(), zz.ravel()], -1) * vox
-            reach = np.asarray(camera_reach(med, self.camera_position,
-                                            mi.Point3f(*[pts[:, i].astype(np.float32) for i in range(3)])))
-            self.mean_tex = _texture(depth / np.maximum(reach, 1e-6 * med.voxel).reshape(depth.shape))
+            def reach_at(q):
+                return np.asarray(camera_reach(med, self.camera_position,
+                                               mi.Point3f(*[q[:, i].astype(np.float32) for i in range(3)])))
+            reach = reach_at(pts).reshape(depth.shape)
+            mean = depth / np.maximum(reach, 1e-6 * med.voxel)
+            self.mean_tex = _texture(mean)
             steep = sum(np.abs(np.gradient(depth.astype(np.float64), axis=a)) if depth.shape[a] > 1 else 0.0
                         for a in range(3))
-            self.steep_tex = _texture(np.broadcast_to(steep, depth.shape))
+            # the exact depth's own change across the voxel: where the voxel's ray leaves the box through a face
+            # the camera sees at a grazing angle, its reach falls to 0 within the voxel (1 / cos per unit across
+            # the face) while the centres' differences, whose rays leave through the same face, need not show it
+            half = np.diag(vox / 2)
+            across = sum(np.abs(reach_at(pts + half[a]) - reach_at(pts - half[a])) for a in range(3))
+            steep = np.maximum(steep, mean * across.reshape(depth.shape))
+            self.steep_tex = _texture(steep)
 
     def parts(self, p, uvw):
         """(trilinear D_cam, exact depth, change across a voxel) at world points ``p`` (texture coordinates
@@ -247,8 +256,10 @@ def cache_fields(numerators: np.ndarray, weighted_integrals: np.ndarray, guide: 
     weighted mean of S pulls the cells at the cloud's edge toward the denser interior, which brightened thin
     clouds by 5-20 % against Mitsuba; a local plane has no such first-order bias.
     """
-    num = np.asarray(numerators, np.float64)
     den = np.asarray(weighted_integrals, np.float64)
+    # a cell the camera cannot see (Q = 0: :func:`weighted_voxel_integrals`) holds nothing: tallies that reached it
+    # anyway would be divided by the interpolated Q of its neighbours, vanishing toward its centre
+    num = np.where(den > 0, np.asarray(numerators, np.float64), 0.0)
     if guide is not None and guide_width > 0:
         num, den = _local_linear(num, den, np.asarray(guide, np.float64), float(guide_width))
     top = float(den.max()) if den.size else 0.0
