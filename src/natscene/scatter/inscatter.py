@@ -28,7 +28,7 @@ the camera sees only its first mean free path; near the lit surface S changes ov
 clouds' high orders would come out too bright against Mitsuba (docs/stages/precompute.md). Any positive
 weight gives a consistent weighted mean as long as the tallies and Q use the same one, so Q must be exact:
 :func:`weighted_voxel_integrals` integrates the trilinear density times w per voxel by Gauss-Legendre nodes
-inside each trilinear patch.
+inside each trilinear patch (in smaller pieces where a box-filling volume's exact depth falls steeply).
 
 The view march (Eq. 5's integral with the cache's S_b in place of the sun term) interpolates C_b and Q
 trilinearly and divides after the interpolation (normalised interpolation: a cell with little visible
@@ -58,7 +58,7 @@ from natscene.scatter.medium import ray_box_dr
 from natscene.scatter.rays import camera_rays, pixel_means
 from natscene.scatter.single import one_minus_exp
 
-__all__ = ["voxel_camera_depth", "CameraDepth", "blended_depth", "EXACT_STEEPNESS", "visibility",
+__all__ = ["voxel_camera_depth", "CameraDepth", "MOST_PIECES", "visibility",
            "weighted_voxel_integrals", "block_sum", "cache_fields", "gather", "VISIBLE_DEPTH"]
 
 #: the camera optical depth past which the visibility weight w = exp(-depth) is below 1e-8: what lies deeper adds
@@ -100,25 +100,23 @@ def camera_reach(med, camera_position, p):
     return dr.minimum(dr.maximum(t1, 0.0), dist)
 
 
-#: the camera depth's change across a voxel (sig_k x depth, summed over the axes) up to which a box-filling volume's
-#: visibility weight takes the exact depth, and from which the voxel-centred one (between: a linear blend): the
-#: denominator's 4 Gauss-Legendre nodes a voxel integrate e^-2.5 across it within 0.1 % and e^-4 within 1 %, and
-#: fail where a grazing view crosses a face voxel (e^-200 across it)
-EXACT_STEEPNESS = (2.5, 4.0)
+#: the most pieces per half voxel and axis of the denominator's quadrature (:func:`weighted_voxel_integrals`)
+MOST_PIECES = 64
 
 
 class CameraDepth:
-    """D̃(x), the voxel-centred D_cam (:func:`voxel_camera_depth`) between the voxels: the lookup of the visibility
-    weight.
+    """D̃(x), the lookup of the visibility weight's camera depth at world points.
 
-    Trilinear in D_cam, except in a volume whose density reaches its box's faces (``med.face_dense``). There the
-    trilinear D_cam is held over the half voxel at a face, where it overestimates the depth, and the cells'
-    weighted mean leaned to their deeper part: a slab filling its box read 3-4 % bright at 100 and 300 optical
-    depths (docs/stages/precompute.md). Such a volume also holds the mean density along each voxel's ray, D_cam / t
-    (t: :func:`camera_reach`), whose interpolation times x's own t is the exact depth in a box of constant density,
-    and the depth's change across each voxel (the sum over the axes of its central differences): the weight takes
-    the exact depth where sig_k times that change is at most :data:`EXACT_STEEPNESS` [0] and the trilinear one
-    from [1] on (:func:`blended_depth`), so that the denominator's quadrature stays exact.
+    The voxel-centred D_cam (:func:`voxel_camera_depth`) interpolated trilinearly, except in a volume whose density
+    reaches its box's faces (``med.face_dense``): there the trilinear D_cam is held over the half voxel at a face,
+    where it overestimates the depth, and the cells' weighted mean leaned to their deeper part (a slab filling its
+    box read 3-4 % bright at 100 and 300 optical depths; seen from 85 degrees, its orders >= 2 14 % bright, from 89
+    degrees the top voxels' weight e^-21 where the face's own is 1; docs/stages/precompute.md). Such a volume takes
+    the exact depth: the mean density along each voxel's ray, D_cam / t (t: :func:`camera_reach`), interpolated,
+    times x's own t (exact in a box of constant density), and holds its change across each voxel along each axis
+    (:attr:`across`: the larger of the centres' central difference and the mean density times the change of t
+    between the voxel's faces, which a face seen at a grazing angle makes 1 / cos(zenith) voxels), by which
+    :func:`weighted_voxel_integrals` divides its quadrature.
     """
 
     def __init__(self, med, depth_vox: np.ndarray, camera_position):
@@ -126,41 +124,53 @@ class CameraDepth:
         self.camera_position = tuple(float(e) for e in camera_position)
         self.per_length = bool(getattr(med, "face_dense", False))
         depth = np.asarray(depth_vox, np.float32)
+        self.values = depth
         self.tex = _texture(depth)
-        self.mean_tex = self.steep_tex = None
+        self.mean_tex = self.across = None
         if self.per_length:
             nz, ny, nx = depth.shape
             vox = (med.bbox_max - med.bbox_min) / np.array([nx, ny, nz])
             zz, yy, xx = np.meshgrid(*[(np.arange(n) + 0.5) for n in (nz, ny, nx)], indexing="ij")
             pts = med.bbox_min + np.stack([xx.ravel(), yy.ravel(), zz.ravel()], -1) * vox
+
             def reach_at(q):
                 return np.asarray(camera_reach(med, self.camera_position,
-                                               mi.Point3f(*[q[:, i].astype(np.float32) for i in range(3)])))
-            reach = reach_at(pts).reshape(depth.shape)
-            mean = depth / np.maximum(reach, 1e-6 * med.voxel)
+                                               mi.Point3f(*[q[:, i].astype(np.float32) for i in range(3)])),
+                                  np.float64).reshape(depth.shape)
+
+            mean = depth / np.maximum(reach_at(pts), 1e-6 * med.voxel)
             self.mean_tex = _texture(mean)
-            steep = sum(np.abs(np.gradient(depth.astype(np.float64), axis=a)) if depth.shape[a] > 1 else 0.0
-                        for a in range(3))
-            # the exact depth's own change across the voxel: where the voxel's ray leaves the box through a face
-            # the camera sees at a grazing angle, its reach falls to 0 within the voxel (1 / cos per unit across
-            # the face) while the centres' differences, whose rays leave through the same face, need not show it
             half = np.diag(vox / 2)
-            across = sum(np.abs(reach_at(pts + half[a]) - reach_at(pts - half[a])) for a in range(3))
-            steep = np.maximum(steep, mean * across.reshape(depth.shape))
-            self.steep_tex = _texture(steep)
+            self.across = np.stack([np.maximum(
+                np.abs(np.gradient(depth.astype(np.float64), axis=2 - a)) if depth.shape[2 - a] > 1 else 0.0,
+                mean * np.abs(reach_at(pts + half[a]) - reach_at(pts - half[a]))) for a in range(3)])
 
-    def parts(self, p, uvw):
-        """(trilinear D_cam, exact depth, change across a voxel) at world points ``p`` (texture coordinates
-        ``uvw``); the last two None unless the volume fills its box."""
-        d = self.tex.eval(uvw)[0]
+    def __call__(self, p, uvw):
+        """D̃ at world points ``p`` (their texture coordinates ``uvw``)."""
         if not self.per_length:
-            return d, None, None
-        return (d, self.mean_tex.eval(uvw)[0] * camera_reach(self.med, self.camera_position, p),
-                self.steep_tex.eval(uvw)[0])
+            return self.tex.eval(uvw)[0]
+        return self.mean_tex.eval(uvw)[0] * camera_reach(self.med, self.camera_position, p)
 
-    def __call__(self, p, uvw, sig_k):
-        """D̃ at world points ``p`` (their texture coordinates ``uvw``) for the extinction ``sig_k``."""
-        return blended_depth(*self.parts(p, uvw), sig_k)
+    def trilinear(self, uvw):
+        """The voxel-centred D_cam interpolated trilinearly at texture coordinates ``uvw``."""
+        return self.tex.eval(uvw)[0]
+
+    def lower(self) -> np.ndarray:
+        """A lower bound of D̃ in each voxel (float64 [nz, ny, nx]), density within 2 voxels taken as the volume's
+        largest nearby; in a volume that fills its box also its centre's less half its change across it."""
+        from scipy.ndimage import maximum_filter
+        d = np.asarray(self.med.volume.density, np.float32)
+        out = np.asarray(self.values, np.float64) - maximum_filter(d, size=3) * 2.0 * self.med.voxel
+        if self.per_length:
+            out = np.minimum(out, np.asarray(self.values, np.float64) - self.across.sum(0) / 2)
+        return out
+
+    def pieces(self, sig_k: float) -> np.ndarray:
+        """(3, nz, ny, nx) int: the quadrature's pieces per half voxel along x, y and z, so that the weight changes
+        by at most e^-1 across a piece (1 outside a volume that fills its box; at most :data:`MOST_PIECES`)."""
+        if not self.per_length:
+            return np.ones((3,) + self.values.shape, np.int64)
+        return np.clip(np.ceil(sig_k * self.across / 2.0), 1, MOST_PIECES).astype(np.int64)
 
 
 def _texture(values: np.ndarray):
@@ -168,23 +178,11 @@ def _texture(values: np.ndarray):
     return mi.Texture3f(mi.TensorXf(np.ascontiguousarray(np.asarray(values, np.float32)[..., None])))
 
 
-def blended_depth(depth, exact, steepness, sig_k):
-    """The visibility weight's depth from :meth:`CameraDepth.parts` (numpy or Dr.Jit arrays): ``depth`` where
-    ``exact`` is None, else ``exact`` where sig_k ``steepness`` <= :data:`EXACT_STEEPNESS` [0], ``depth`` from [1]
-    on, linear between."""
-    if exact is None:
-        return depth
-    lo, hi = EXACT_STEEPNESS
-    x = (hi - sig_k * steepness) / (hi - lo)
-    a = (abs(x) - abs(x - 1.0) + 1.0) / 2.0             # x clipped to [0, 1], for numpy and Dr.Jit arrays alike
-    return depth + a * (exact - depth)
-
-
 def visibility(depth: CameraDepth, p, uvw, sig_k):
     """w(x) = exp(-sig_k D̃(x)): the camera transmittance at world points ``p`` (texture coordinates ``uvw``), D̃
     the interpolated D_cam (:class:`CameraDepth`). The weight of every tally (:mod:`.photons`) and of the
     cache's denominator (:func:`weighted_voxel_integrals`)."""
-    return dr.exp(-sig_k * depth(p, uvw, sig_k))
+    return dr.exp(-sig_k * depth(p, uvw))
 
 
 #: Gauss-Legendre nodes (2 per half voxel, in voxel units from the voxel's low corner): each half voxel lies
@@ -193,38 +191,53 @@ _GL = np.array([0.25 - 0.25 / np.sqrt(3.0), 0.25 + 0.25 / np.sqrt(3.0), 0.75 - 0
                 0.75 + 0.25 / np.sqrt(3.0)])
 
 
+def _axis_nodes(m: int) -> np.ndarray:
+    """2 Gauss-Legendre nodes in each of m equal pieces of both half voxels, in voxel units (m = 1: :data:`_GL`)."""
+    c = np.arange(2 * m) / (2 * m) + 1 / (4 * m)
+    off = 1 / (4 * m) / np.sqrt(3.0)
+    return np.sort(np.concatenate([c - off, c + off]))
+
+
 def weighted_voxel_integrals(med, depth_vox: np.ndarray, camera_position, sig_k: float,
-                             chunk: int = 1 << 17) -> np.ndarray:
+                             chunk: int = 1 << 23) -> np.ndarray:
     """∫_v rho(x) w(x) dV / voxel volume for every voxel v, float64 [nz, ny, nx], w the visibility
     (:func:`visibility`).
 
     4 x 4 x 4 Gauss-Legendre nodes per voxel (2 per half voxel and axis, :data:`_GL`): exact for the trilinear
-    density alone, and within 0.2 % for a transmittance that falls by e^-3 across a voxel. Voxels the camera
-    cannot see (w < 1e-8 everywhere in them) and voxels without density near them are left 0 (their tallies
-    are weighted below 1e-8 too)."""
-    from scipy.ndimage import binary_dilation, maximum_filter
+    density alone, and within 0.2 % for a transmittance that falls by e^-3 across a voxel. In a volume that fills
+    its box each half voxel is split along each axis into :meth:`CameraDepth.pieces` of 2 nodes, where the exact
+    depth falls steeply (a face seen at a grazing angle: e^-45 across the top voxels of a slab of 10 optical depths
+    in 16 layers, seen from 89 degrees). ``chunk``: quadrature nodes at a time. Voxels the camera cannot see
+    (w < 1e-8 everywhere in them: :meth:`CameraDepth.lower`) and voxels without density near them are left 0
+    (their tallies are weighted below 1e-8 too)."""
+    from scipy.ndimage import binary_dilation
     d = np.asarray(med.volume.density, np.float32)
     nz, ny, nx = d.shape
     out = np.zeros(d.shape, np.float64)
-    reach = sig_k * (np.asarray(depth_vox, np.float64) - maximum_filter(d, size=3) * 2.0 * med.voxel)
-    live = binary_dilation(d > 0, iterations=1) & (reach < VISIBLE_DEPTH)
-    iz, iy, ix = np.nonzero(live)
-    if iz.size == 0:
-        return out
     depth = CameraDepth(med, depth_vox, camera_position)
+    live = binary_dilation(d > 0, iterations=1) & (sig_k * depth.lower() < VISIBLE_DEPTH)
+    if not live.any():
+        return out
+    pieces = depth.pieces(sig_k)
+    key = pieces[0] + (MOST_PIECES + 1) * (pieces[1] + (MOST_PIECES + 1) * pieces[2])
     lo, ext = mi.ScalarPoint3f(*med.bbox_min), mi.ScalarVector3f(*(med.bbox_max - med.bbox_min))
-    gl = mi.Float(_GL.astype(np.float32))
-    for c0 in range(0, iz.size, chunk):
-        sel = slice(c0, min(c0 + chunk, iz.size))
-        n = iz[sel].size
-        k = dr.arange(mi.UInt32, n * 64)
-        v, o = k // 64, k % 64
-        ox, oy, oz = dr.gather(mi.Float, gl, o % 4), dr.gather(mi.Float, gl, (o // 4) % 4), dr.gather(mi.Float, gl, o // 16)
-        uvw = mi.Point3f((mi.Float(dr.gather(mi.UInt32, mi.UInt32(ix[sel].astype(np.uint32)), v)) + ox) / nx,
-                         (mi.Float(dr.gather(mi.UInt32, mi.UInt32(iy[sel].astype(np.uint32)), v)) + oy) / ny,
-                         (mi.Float(dr.gather(mi.UInt32, mi.UInt32(iz[sel].astype(np.uint32)), v)) + oz) / nz)
-        f = dr.maximum(med.density_tex.eval(uvw)[0], 0.0) * visibility(depth, lo + uvw * ext, uvw, sig_k)
-        out[iz[sel], iy[sel], ix[sel]] = np.asarray(dr.block_sum(f, 64), np.float64) / 64.0
+    for kval in np.unique(key[live]):
+        iz, iy, ix = np.nonzero(live & (key == kval))
+        nodes = [_axis_nodes(int(pieces[a][iz[0], iy[0], ix[0]])) for a in range(3)]
+        mx, my, mz = (nd.size for nd in nodes)
+        per = mx * my * mz
+        gx, gy, gz = (mi.Float(nd.astype(np.float32)) for nd in nodes)
+        step = max(1, chunk // per)
+        for c0 in range(0, iz.size, step):
+            sel = slice(c0, min(c0 + step, iz.size))
+            k = dr.arange(mi.UInt32, iz[sel].size * per)
+            v, o = k // per, k % per
+            ox, oy, oz = dr.gather(mi.Float, gx, o % mx), dr.gather(mi.Float, gy, (o // mx) % my), dr.gather(mi.Float, gz, o // (mx * my))
+            uvw = mi.Point3f((mi.Float(dr.gather(mi.UInt32, mi.UInt32(ix[sel].astype(np.uint32)), v)) + ox) / nx,
+                             (mi.Float(dr.gather(mi.UInt32, mi.UInt32(iy[sel].astype(np.uint32)), v)) + oy) / ny,
+                             (mi.Float(dr.gather(mi.UInt32, mi.UInt32(iz[sel].astype(np.uint32)), v)) + oz) / nz)
+            f = dr.maximum(med.density_tex.eval(uvw)[0], 0.0) * visibility(depth, lo + uvw * ext, uvw, sig_k)
+            out[iz[sel], iy[sel], ix[sel]] = np.asarray(dr.block_sum(f, per), np.float64) / per
     return out
 
 

@@ -51,7 +51,7 @@ import natscene.variant  # noqa: F401
 import drjit as dr
 import mitsuba as mi
 
-from natscene.scatter.inscatter import CameraDepth, blended_depth
+from natscene.scatter.inscatter import CameraDepth
 from natscene.scatter.medium import ray_box_dr
 from natscene.scatter.phase import hg, hg_sample_cos
 
@@ -68,7 +68,7 @@ class ShadowSamples:
 
     index: np.ndarray           # (N,) int32: half * cells + flat cell index
     rho: np.ndarray             # (N,) density at the point
-    depth_camera: np.ndarray    # (N,) D̃_cam: ∫ rho toward the camera (world units), trilinear as the tallies'
+    depth_camera: np.ndarray    # (N,) D̃_cam: ∫ rho toward the camera (world units), as the tallies' (CameraDepth)
     depth_light: np.ndarray     # (N,) D: ∫ rho from the point back toward the light's source
     cos_camera: np.ndarray      # (N,) ω · ω_cam
     inv_q: np.ndarray           # (N,) 1 / the mixture's pdf of ω
@@ -76,8 +76,6 @@ class ShadowSamples:
     cells: tuple                # (cz, cy, cx)
     depth_ground: np.ndarray | None = None   # (N,) D toward the sun from the ground point behind -ω (a shadowed
                                              # ground, :class:`natscene.scatter.skylight.GroundLight`), else None
-    depth_camera_exact: np.ndarray | None = None   # (N,) the exact depth and the depth's change across a voxel in
-    camera_steepness: np.ndarray | None = None     # a volume that fills its box (inscatter.CameraDepth), else None
 
 
 def _occupied_cells(density: np.ndarray, factor: int) -> np.ndarray:
@@ -205,7 +203,7 @@ def shadow_samples(med, depth_vox: np.ndarray, camera_position, sky, gs, factor:
         dl = _march_depth(med, o, s, dr.maximum(t1, 0.0), med.voxel * step_voxels)
         uvw = (o - lo) / ext
         rho = med.rho(o)
-        dc, dc_exact, steep = depth.parts(o, uvw)
+        dc = depth(o, uvw)
         dr.eval(dl, rho, dc)
         # compact: 28 bytes a point, 32 with the ground's depth in a frame (the cosine and the depths in float32,
         # where the forward peak and the transmittance need the digits)
@@ -215,9 +213,6 @@ def shadow_samples(med, depth_vox: np.ndarray, camera_position, sky, gs, factor:
                     radiance=_dome_radiance(dome, src, ground_sky).astype(np.float16))
         if ground_sky is not None:
             part["depth_ground"] = np.asarray(med.ground_sun_depth(o, s), np.float32)
-        if dc_exact is not None:              # a volume that fills its box (CameraDepth): +8 bytes a point
-            part["depth_camera_exact"] = np.asarray(dc_exact, np.float32)
-            part["camera_steepness"] = np.asarray(steep, np.float32)
         parts.append(part)
     cat = {k: np.concatenate([pt[k] for pt in parts], axis=-1) for k in parts[0]} if parts else None
     if cat is None:
@@ -242,9 +237,6 @@ def first_order_numerators(samples: ShadowSamples, sig_k: float, g: float, weigh
         part = slice(a, a + chunk)
         idx = samples.index[part]
         dc = samples.depth_camera[part].astype(np.float64)
-        if samples.depth_camera_exact is not None:
-            dc = blended_depth(dc, samples.depth_camera_exact[part].astype(np.float64),
-                               samples.camera_steepness[part].astype(np.float64), sig_k)
         wr = samples.rho[part].astype(np.float64) * np.exp(-sig_k * dc)
         val = (wr * np.exp(-sig_k * samples.depth_light[part].astype(np.float64)) * hg(samples.cos_camera[part], g)
                * samples.inv_q[part].astype(np.float64))
