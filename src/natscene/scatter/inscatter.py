@@ -156,8 +156,8 @@ class CameraDepth:
         return self.tex.eval(uvw)[0]
 
     def lower(self) -> np.ndarray:
-        """A lower bound of D̃ in each voxel (float64 [nz, ny, nx]), density within 2 voxels taken as the volume's
-        largest nearby; in a volume that fills its box also its centre's less half its change across it."""
+        """A lower bound of D̃ in each voxel (float64 [nz, ny, nx]): the voxel-centred depth less 2 voxels of the
+        largest density next to the voxel and, in a volume that fills its box, less half its change across it."""
         from scipy.ndimage import maximum_filter
         d = np.asarray(self.med.volume.density, np.float32)
         out = np.asarray(self.values, np.float64) - maximum_filter(d, size=3) * 2.0 * self.med.voxel
@@ -232,7 +232,8 @@ def weighted_voxel_integrals(med, depth_vox: np.ndarray, camera_position, sig_k:
             sel = slice(c0, min(c0 + step, iz.size))
             k = dr.arange(mi.UInt32, iz[sel].size * per)
             v, o = k // per, k % per
-            ox, oy, oz = dr.gather(mi.Float, gx, o % mx), dr.gather(mi.Float, gy, (o // mx) % my), dr.gather(mi.Float, gz, o // (mx * my))
+            ox, oy = dr.gather(mi.Float, gx, o % mx), dr.gather(mi.Float, gy, (o // mx) % my)
+            oz = dr.gather(mi.Float, gz, o // (mx * my))
             uvw = mi.Point3f((mi.Float(dr.gather(mi.UInt32, mi.UInt32(ix[sel].astype(np.uint32)), v)) + ox) / nx,
                              (mi.Float(dr.gather(mi.UInt32, mi.UInt32(iy[sel].astype(np.uint32)), v)) + oy) / ny,
                              (mi.Float(dr.gather(mi.UInt32, mi.UInt32(iz[sel].astype(np.uint32)), v)) + oz) / nz)

@@ -40,7 +40,8 @@ from natscene.volume.grid import Volume, placement
 
 __all__ = ["SUN", "CAM", "SIGMAS", "GS", "BETAS", "NOSKY", "K", "SETTINGS", "blob_volume", "volpath_references",
            "slab_volume", "slab_camera", "slab_layers", "slab_width", "comparison_slab", "slab_sun",
-           "slab_sun_radiance", "SLAB_VIEW", "adding_doubling", "adding_doubling_flux", "block_ratios", "OPACITY_BANDS", "band_ratios"]
+           "slab_sun_radiance", "SLAB_VIEW", "adding_doubling", "adding_doubling_flux", "block_ratios",
+           "OPACITY_BANDS", "band_ratios"]
 
 SUN = np.array([0.5, 0.6, 0.3]) / np.linalg.norm([0.5, 0.6, 0.3])
 CAM = Camera((0.0, 0.25, -1.8), (0.0, 0.28, 0.0), (0.0, 1.0, 0.0), fov=30, width=48, height=36)
