@@ -13,7 +13,7 @@ import mitsuba as mi
 
 from natscene.scatter.inscatter import CameraDepth, voxel_camera_depth, weighted_voxel_integrals
 from natscene.scatter.medium import make_medium
-from natscene.scatter.reference_scene import slab_volume
+from natscene.scatter.reference_scene import slab_camera, slab_volume
 
 N = 16
 MU = 0.8                                                  # cosine of the camera's zenith angle
@@ -63,7 +63,7 @@ def _grazing_slab():
     the top."""
     mu = np.cos(np.radians(89.17))
     med = make_medium(slab_volume(tau=10.0, n=(48, 16, 48), width=12.0))
-    return med, np.array([0.0, 1.0, 0.0]) + 400.0 * np.array([np.sqrt(1 - mu * mu), mu, 0.0])
+    return med, np.asarray(slab_camera(mu, height=1.0).position, np.float64)
 
 
 @pytest.mark.parametrize("case", ["sig_k 8", "sig_k 24", "grazing"])

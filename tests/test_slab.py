@@ -29,6 +29,8 @@ its middle in 16 x 16 pixels (``SLAB_VIEW``: one run scatters by 0.4 % at tau 10
 degrees from the normal is twice as long) with four runs. Values below 1e-3 of the incident scale are compared in
 absolute terms (2e-5): the photons cannot resolve a relative 2 % there.
 """
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -64,9 +66,7 @@ def flux_settings(tau: float):
     """FLUX, with up to 4 times the collisions where the slab is wider than 12 (``slab_width``: tau 1 at g 0.85,
     33 wide, spreads the photons over 7.7 times the area)."""
     area = (slab_width(tau, 0.85) / 12.0) ** 2
-    return FLUX if area <= 1 else default_settings(
-        AllOrdersSettings, sun_collisions=int(FLUX.sun_collisions * min(area, 4.0)), sky_collisions=0, fine_voxels=1,
-        coarse_voxels=1, camera_lobe=0.0, importance=False)
+    return FLUX if area <= 1 else replace(FLUX, sun_collisions=int(FLUX.sun_collisions * min(area, 4.0)))
 
 
 def dome_radiance(tau: float, g: float, mu: float, above: bool, seeds) -> dict:

@@ -14,11 +14,10 @@ import numpy as np
 
 import natscene  # noqa: F401
 from natscene.config import default_settings
-from natscene.geometry import Camera
 from natscene.phase import hg
 from natscene.scatter.allorders import AllOrdersSettings, Lighting, Scene, view_images
 from natscene.scatter.bands import band_weights
-from natscene.scatter.reference_scene import adding_doubling, comparison_slab, slab_sun
+from natscene.scatter.reference_scene import adding_doubling, comparison_slab, slab_camera, slab_sun
 from natscene.scatter.single import march_view
 
 SETTINGS = default_settings(AllOrdersSettings, sun_collisions=1_500_000, sky_collisions=0, fine_voxels=1,
@@ -36,9 +35,7 @@ def main():
     vol, sun = comparison_slab(tau), slab_sun(0.0)
     for angle in args.angles:
         mu = float(np.cos(np.radians(angle)))
-        face = np.array([0.0, 1.0, 0.0])
-        eye = face + 400.0 * np.array([np.sqrt(1 - mu * mu), mu, 0.0])
-        cam = Camera(tuple(eye), tuple(face), (0.0, 0.0, 1.0), fov=0.6 * mu, width=8, height=8)
+        cam = slab_camera(mu, res=8, fov=0.6 * mu, height=1.0)
         scene = Scene(vol, Lighting(sun, None), SETTINGS)
         vi = view_images(scene, cam, 1.0, g, seed=args.seed)
         single = np.pi * hg(cam.ray_directions() @ sun, g) * march_view(scene.med, cam, [1.0])["S_sun"][0]

@@ -79,12 +79,14 @@ def slab_volume(tau: float = 2.0, n: tuple = (96, 16, 96), width: float = 40.0) 
     return Volume(np.ones((nz, ny, nx), np.float32), lo, hi, tau)
 
 
-def slab_camera(mu: float, above: bool = True, distance: float = 400.0, res: int = 16, fov: float = 0.3) -> Camera:
-    """A far camera looking at the slab's centre from direction cos(zenith) = mu (azimuth +x); at the default
-    ``fov`` it sees 2.1 thicknesses of the slab across (its footprint on the slab: 1 / mu times that along x)."""
+def slab_camera(mu: float, above: bool = True, distance: float = 400.0, res: int = 16, fov: float = 0.3,
+                height: float = 0.5) -> Camera:
+    """A far camera looking from direction cos(zenith) = mu (azimuth +x) at the point of the slab's axis ``height``
+    thicknesses above its bottom (its centre; 1: the middle of its top face); at the default ``fov`` it sees 2.1
+    thicknesses of the slab across (its footprint on the slab: 1 / mu times that along x)."""
     s = np.sqrt(max(1 - mu * mu, 0.0))
     d = np.array([s, mu if above else -mu, 0.0])
-    centre = np.array([0.0, 0.5, 0.0])
+    centre = np.array([0.0, height, 0.0])
     return Camera(tuple(centre + distance * d), tuple(centre), (0.0, 0.0, 1.0), fov=fov, width=res, height=res)
 
 
