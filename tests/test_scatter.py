@@ -365,3 +365,36 @@ def test_gather_marches_once_for_all_its_images():
         alone, n_one = launches(caches[i:i + 1])
         np.testing.assert_allclose(together[i], alone[0], rtol=1e-6, atol=1e-7)
         assert n_three == n_one, (n_three, n_one)
+
+
+def _layer_means(edges: np.ndarray, mu: float, c: float) -> tuple[np.ndarray, np.ndarray]:
+    """Per layer [a, b] of optical depth z above a face seen from mu: Q = ∫ e^(-z/mu) dz and the mean of
+    S(z) = z + c weighted by e^(-z/mu) (closed forms)."""
+    a, b = edges[:-1], edges[1:]
+    ea, eb = np.exp(-a / mu), np.exp(-b / mu)
+    q = mu * (ea - eb)
+    first = mu * (a * ea - b * eb) + mu * mu * (ea - eb)     # ∫ z e^(-z/mu) dz over [a, b]
+    return q, first / q + c
+
+
+@pytest.mark.parametrize("layers", [16, 5])
+def test_gather_of_a_field_rising_from_a_face(layers):
+    """A slab of 10 optical depths seen from 30 degrees off the normal of its bottom face, its in-scatter rising
+    linearly inward, S(z) = z + 0.71 (the diffusion profile of light transmitted through a thick slab, 0.71 mean
+    free paths its extrapolation length). Each layer's cache holds what the photons' tallies estimate, the mean of
+    S weighted by the camera transmittance e^(-z/mu), and Q = ∫ e^(-z/mu) (closed forms); the view integral
+    ∫ e^(-s) S(mu s) ds is mu + 0.71. The march reconstructs it within 1.5 % in layers of 0.625 and 4 % in layers of
+    2 mean free paths (interpolating C and Q and dividing, which leans every point toward the shallower layer:
+    2.4 % and 6.4 % low; 0.8 % and 3.2 % high here)."""
+    from natscene.scatter.inscatter import gather
+    from natscene.scatter.reference_scene import slab_camera, slab_volume
+    mu, c = float(np.cos(np.radians(30))), 0.71
+    vol = slab_volume(tau=10.0, n=(8, layers, 8), width=4.0)
+    q, s = _layer_means(np.linspace(0.0, 10.0, layers + 1), mu, c)
+    shape = vol.density.shape
+    den = np.broadcast_to(q[None, :, None], shape).astype(np.float32)
+    caches = np.broadcast_to((s * q)[None, None, :, None], (1,) + shape).astype(np.float32)
+    img = gather(make_medium(vol), slab_camera(mu, above=False, res=8), 1.0, caches, den, 1, 0.25, 1)
+    exact = mu + c
+    print(f"layers {layers}: {img.mean() / exact:.4f} of the exact view integral")
+    assert abs(img.mean() / exact - 1) <= (0.015 if layers == 16 else 0.04), img.mean() / exact

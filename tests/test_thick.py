@@ -130,8 +130,6 @@ def test_band_ratios_split_by_opacity():
     assert got == pytest.approx({"0.1-0.5": 1.1, "0.5-0.9": 0.9, "0.9-0.99": 1.0, "0.99-1": 1.02})
 
 
-@pytest.mark.xfail(strict=True, reason="the thin bands read 8 %, 4.6 % and 2.2 % high at the shots' cache cells "
-                   "(2 and 2 voxels); cells of one voxel give 1.00 / 1.02 / 1.02 / 1.00 (docs/stages/precompute.md)")
 def test_cumulonimbus_by_opacity_band_at_shot_settings(refs):
     """The day shot's render settings (config shots.day_to_sunset.render, its cache cells) on the
     cumulonimbus at 160x120: the ratio to volpath within 3 % in each opacity band, mean of two runs."""

@@ -30,10 +30,17 @@ weight gives a consistent weighted mean as long as the tallies and Q use the sam
 :func:`weighted_voxel_integrals` integrates the trilinear density times w per voxel by Gauss-Legendre nodes
 inside each trilinear patch (in smaller pieces where a box-filling volume's exact depth falls steeply).
 
-The view march (Eq. 5's integral with the cache's S_b in place of the sun term) interpolates C_b and Q
-trilinearly and divides after the interpolation (normalised interpolation: a cell with little visible
-density weighs in by the little it holds, a cell without density not at all), and integrates each segment
-exactly for a density constant over it, as :mod:`.single`:
+The view march (Eq. 5's integral with the cache's S_b in place of the sun term) interpolates the cells' S_b
+trilinearly, each cell weighted by its confidence m = Q / (Q + eps Q_max) (eps = :data:`CONFIDENT_Q`):
+
+    S_b(x) = Σ_i a_i(x) m_i S_b,i / Σ_i a_i(x) m_i,        a_i the trilinear weights,
+
+so a cell of ordinary Q weighs in by its position alone, a cell of little Q (density only from its neighbours'
+trilinear support, or far behind the visible skin: few tallies, a noisy ratio) by its Q, and a cell the camera
+cannot see not at all. Weighting every cell by its Q (C_b and Q interpolated, then divided) leaned each point
+toward its neighbour of more visible density, the shallower or the denser: a cloud's thin edges took the brighter
+light of its inside and a slab's transmitted light read low (docs/stages/precompute.md, "The in-scatter cache").
+Each segment is integrated exactly for a density constant over it, as :mod:`.single`:
 
     E_b(q) = Σ_segments T_prev (1 - exp(-sigma_t k rho_i h)) S_b(x_i),
 
@@ -59,7 +66,12 @@ from natscene.scatter.rays import camera_rays, pixel_means
 from natscene.scatter.single import one_minus_exp
 
 __all__ = ["voxel_camera_depth", "CameraDepth", "MOST_PIECES", "visibility",
-           "weighted_voxel_integrals", "block_sum", "cache_fields", "gather", "VISIBLE_DEPTH"]
+           "weighted_voxel_integrals", "block_sum", "cache_fields", "gather", "VISIBLE_DEPTH", "CONFIDENT_Q",
+           "interpolation_fields"]
+
+#: the cells' confidence scale: a cell whose Q is below this fraction of the largest weighs in by its Q in the view
+#: march's interpolation (:func:`gather`), above it by its position
+CONFIDENT_Q = 1e-3
 
 #: the camera optical depth past which the visibility weight w = exp(-depth) is below 1e-8: what lies deeper adds
 #: nothing the camera sees
@@ -259,9 +271,8 @@ def cache_fields(numerators: np.ndarray, weighted_integrals: np.ndarray, guide: 
 
     ``numerators`` (..., cz, cy, cx): the tallies C_b (:mod:`.photons`), each weighted by the visibility w;
     ``weighted_integrals`` (cz, cy, cx): ∫_cell w sigma_t dV (:func:`weighted_voxel_integrals`).
-    The in-scattered radiance is their ratio, S = C / Q; :func:`gather` interpolates C and Q separately and
-    divides after the interpolation (normalised interpolation), so that a cell with little visible density
-    weighs in by the little it holds, and a cell without density not at all.
+    The in-scattered radiance is their ratio, S = C / Q, which :func:`gather` interpolates between the cells by
+    their confidence (:func:`interpolation_fields`).
 
     With ``guide`` (cz, cy, cx; the cells' optical depth toward the camera) and ``guide_width`` > 0, S is
     smoothed by a 3x3x3 cross-bilateral local-linear fit (:func:`_local_linear`): a [1, 2, 1] tent in space
@@ -272,7 +283,7 @@ def cache_fields(numerators: np.ndarray, weighted_integrals: np.ndarray, guide: 
     """
     den = np.asarray(weighted_integrals, np.float64)
     # a cell the camera cannot see (Q = 0: :func:`weighted_voxel_integrals`) holds nothing: tallies that reached it
-    # anyway would be divided by the interpolated Q of its neighbours, vanishing toward its centre
+    # anyway are not light the camera sees
     num = np.where(den > 0, np.asarray(numerators, np.float64), 0.0)
     if guide is not None and guide_width > 0:
         num, den = _local_linear(num, den, np.asarray(guide, np.float64), float(guide_width))
@@ -280,6 +291,20 @@ def cache_fields(numerators: np.ndarray, weighted_integrals: np.ndarray, guide: 
     if top <= 0:
         return np.zeros(num.shape, np.float32), np.zeros(den.shape, np.float32)
     return (num / top).astype(np.float32), (den / top).astype(np.float32)
+
+
+def interpolation_fields(caches: np.ndarray, denominators: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(m S, m[None]) float32: the fields whose trilinear interpolations' ratio is the view march's S
+    (:func:`gather`): S = ``caches`` / ``denominators`` (0 where Q = 0) and each cell's confidence
+    m = Q / (Q + :data:`CONFIDENT_Q` Q_max)."""
+    den = np.asarray(denominators, np.float64)
+    top = float(den.max()) if den.size else 0.0
+    if top <= 0:
+        return np.zeros(np.shape(caches), np.float32), np.zeros((1,) + den.shape, np.float32)
+    seen = den > 0
+    m = den / (den + CONFIDENT_Q * top)
+    S = np.where(seen, np.asarray(caches, np.float64) / np.where(seen, den, 1.0), 0.0)
+    return (m * S).astype(np.float32), m[None].astype(np.float32)
 
 
 @dr.syntax
@@ -311,7 +336,8 @@ def _march(med, tex, nch: int, o, d, sig_k: float, step: float, lo, cache_ext, b
 def gather(med, camera, sigma: float, caches: np.ndarray, denominators: np.ndarray, factor: int,
            step_voxels: float = 0.5, supersample: int = 4, bounds=None, grid=None) -> np.ndarray:
     """E (C, H, W) float32: the view integral of the C cache fields S = ``caches`` / ``denominators``
-    ((C, cz, cy, cx) and (cz, cy, cx), :func:`cache_fields`), each interpolated trilinearly before the division.
+    ((C, cz, cy, cx) and (cz, cy, cx), :func:`cache_fields`), interpolated between the cells by their confidence
+    (:func:`interpolation_fields`).
 
     ``bounds``: (lo, hi) world box the march is limited to (where the density is non-zero; default the
     volume's box). ``grid``: the volume's :class:`natscene.scatter.majorant.MajorantGrid`, whose empty cells the
@@ -328,7 +354,7 @@ def gather(med, camera, sigma: float, caches: np.ndarray, denominators: np.ndarr
     vox = (med.bbox_max - med.bbox_min) / np.array([nx, ny, nz])
     cache_ext = mi.ScalarVector3f(*[float(e) for e in vox * factor * np.array([cx, cy, cz])])
     lo = mi.ScalarPoint3f(*[float(e) for e in med.bbox_min])
-    fields = np.concatenate([caches, np.asarray(denominators, np.float32)[None]])
+    fields = np.concatenate(interpolation_fields(caches, denominators))
     tex = mi.Texture3f(mi.TensorXf(np.ascontiguousarray(np.moveaxis(fields, 0, -1))))
     box_lo, box_hi = bounds if bounds is not None else (med.bbox_min, med.bbox_max)
     o, d, _ = camera_rays(camera, supersample, stratified=supersample > 1)
