@@ -39,7 +39,7 @@ so a cell of ordinary Q weighs in by its position alone, a cell of little Q (den
 trilinear support, or far behind the visible skin: few tallies, a noisy ratio) by its Q, and a cell the camera
 cannot see not at all. Weighting every cell by its Q (C_b and Q interpolated, then divided) leaned each point
 toward its neighbour of more visible density, the shallower or the denser: a cloud's thin edges took the brighter
-light of its inside and a slab's transmitted light read low (docs/stages/precompute.md, "The in-scatter cache").
+light of its inside and a slab's transmitted light read low (docs/stages/precompute.md, "The cache's interpolation").
 Each segment is integrated exactly for a density constant over it, as :mod:`.single`:
 
     E_b(q) = Σ_segments T_prev (1 - exp(-sigma_t k rho_i h)) S_b(x_i),
