@@ -62,16 +62,8 @@ def _q_weighted(caches, denominators):
     return np.asarray(caches, np.float32), np.asarray(denominators, np.float32)[None]
 
 
-def _by_position(caches, denominators):
-    """The fields of the view march that weights every cell with Q > 0 alike."""
-    den = np.asarray(denominators, np.float64)
-    m = (den > 0).astype(np.float64)
-    S = np.where(den > 0, np.asarray(caches, np.float64) / np.where(den > 0, den, 1.0), 0.0)
-    return (m * S).astype(np.float32), m[None].astype(np.float32)
-
-
 def main(args, sheet=None, seeds=(0, 1)):
-    confidence = inscatter.interpolation_fields
+    confidence, scale = inscatter.interpolation_fields, inscatter.CONFIDENT_Q
     with np.load(ROOT / "tests" / "data" / "transport_volpath_thick.npz") as z:
         refs = {k: z[k] for k in z.files if k.startswith("cb_day")}
     cfg = validate_config(load_yaml_config(ROOT / "config" / "config.yaml"),
@@ -97,7 +89,8 @@ def main(args, sheet=None, seeds=(0, 1)):
     top, bottom = [to_srgb8(ref[crop][..., None], exposure)], [np.full(ref[crop].shape + (3,), 128, np.uint8)]
     for arg in args:
         spec, _, how = arg.partition(":")
-        inscatter.interpolation_fields = {"q": _q_weighted, "p": _by_position}.get(how, confidence)
+        inscatter.interpolation_fields = _q_weighted if how == "q" else confidence
+        inscatter.CONFIDENT_Q = 1e-30 if how == "p" else scale     # ":p": every cell with Q > 0 weighs 1
         fine, coarse, *scale = (float(x) for x in spec.split(","))
         st0 = frame_settings(shot)
         st = replace(st0, fine_voxels=int(fine), coarse_voxels=int(coarse),
@@ -121,7 +114,7 @@ def main(args, sheet=None, seeds=(0, 1)):
             if seed == seeds[0]:
                 top.append(to_srgb8(raw[crop][..., None], exposure))
                 bottom.append(np.round(_ratio_rgb(raw[crop] / ref[crop], opacity[crop] >= 0.1) * 255).astype(np.uint8))
-    inscatter.interpolation_fields = confidence
+    inscatter.interpolation_fields, inscatter.CONFIDENT_Q = confidence, scale
     if sheet:
         big = [[np.kron(a, np.ones((3, 3, 1), np.uint8)) for a in r] for r in (top, bottom)]
         gap = np.full((big[0][0].shape[0], 6, 3), 255, np.uint8)
