@@ -90,6 +90,7 @@ class AllOrdersSettings:
     max_order: int
     similarity_order: int                 # high orders by similarity from this order on (0: every order exact)
     p1_order: int                         # the tallies' phase function in its P1 part from this order on (0: HG)
+    diffusion_jumps: bool                 # photons cross homogeneous balls deep inside the cloud in one step
     tally_rate: float                     # tally samples per voxel length at least, along every flight in cloud
     sun_bands: tuple = SUN_BANDS
     sky_bands: tuple = SKY_BANDS
@@ -348,15 +349,16 @@ def weight_window(scene: Scene, source, sigma: float, g: float, camera, seed: in
 
 
 def photons_for(scene: Scene, source, sigma: float, g: float, camera, collisions: int, k_min: int,
-                seed: int, pilot: int = 32768, most: int | None = None, window=None) -> int:
+                seed: int, pilot: int = 32768, most: int | None = None, window=None, camera_depth=None) -> int:
     """Photons that make about ``collisions`` collisions at (sigma, g) (a short pilot run measures the rate,
-    with the weight window ``window`` if any: splitting adds collisions, roulette removes them), at most
-    ``most``."""
+    with the weight window ``window`` if any: splitting adds collisions, roulette removes them; with the
+    diffusion jumps where ``camera_depth`` allows them, each jump one collision), at most ``most``."""
     from natscene.scatter.photons import trace
     t = trace(scene.med, scene.grid, source, sigma, g, camera.position, pilot, ((1, None),),
               caches=((scene.factors[1], None),), seed=seed + 104729, max_order=scene.settings.max_order,
               k_min=10 ** 9, window=window, split_max=scene.settings.split_max,
-              similarity_order=scene.settings.similarity_order)
+              similarity_order=scene.settings.similarity_order, camera_depth=camera_depth,
+              jumps=scene.settings.diffusion_jumps)
     per = max(t.collisions / pilot, 1e-3)
     n = int(min(max(collisions / per, 4 * pilot), 64 * collisions))
     return n if most is None else min(n, int(most))
@@ -370,7 +372,8 @@ def _trace_halves(scene: Scene, source, sigma: float, g: float, camera, n_photon
                   caches=_caches(scene, bands), seed=seed * 2 + h, max_order=scene.settings.max_order, k_min=k_min,
                   camera_depth=camera_depth, tally_rate=scene.settings.tally_rate, window=window,
                   split_max=scene.settings.split_max, camera_lobe=scene.settings.camera_lobe,
-                  similarity_order=scene.settings.similarity_order, p1_order=scene.settings.p1_order)
+                  similarity_order=scene.settings.similarity_order, p1_order=scene.settings.p1_order,
+                  jumps=scene.settings.diffusion_jumps)
             for h in range(2)]
 
 
@@ -515,7 +518,7 @@ def view_images(scene: Scene, camera, sigma: float, g: float, seed: int = 0, noi
     vint = weighted_voxel_integrals(scene.med, depth, camera.position, sigma * scene.volume.extinction_scale)
     win = weight_window(scene, scene.sun, sigma, g, camera, seed) if st.importance else None
     n_sun = photons_for(scene, scene.sun, sigma, g, camera, st.sun_collisions, 10 ** 9, seed,
-                        most=st.sun_photons_max, window=win, pilot=16384 if win else 32768)
+                        most=st.sun_photons_max, window=win, pilot=16384 if win else 32768, camera_depth=depth)
     jobs = [(scene.sun, n_sun, st.sun_bands, 2, seed, win, 1)]
     order1 = None
     if scene.sky is not None:
@@ -523,7 +526,8 @@ def view_images(scene: Scene, camera, sigma: float, g: float, seed: int = 0, noi
                if st.sky_lobe_share > 0 else scene.sky)
         win = weight_window(scene, sky, sigma, g, camera, seed + 7919) if st.importance else None
         n_sky = photons_for(scene, sky, sigma, g, camera, st.sky_collisions, 10 ** 9, seed + 7919,
-                            most=st.sky_photons_max, window=win, pilot=16384 if win else 32768)
+                            most=st.sky_photons_max, window=win, pilot=16384 if win else 32768,
+                            camera_depth=depth)
         shadow = st.sky_order1_points > 0
         jobs.append((sky, n_sky, st.sky_bands, 2 if shadow else 1, seed + 7919, win, 4))
         order1 = _sky_order1_images(scene, camera, sigma, g, vint) if shadow else None

@@ -80,6 +80,7 @@ class Medium:
         return dr.select(inside, dr.maximum(v, 0.0), 0.0)
 
     near_voxels: float = 4.0    # near field of D marched exactly (voxels), see sun_depth
+    balls: dict = None          # natscene.scatter.jumps.homogeneous_radii per cell size, once found (homogeneous)
     near_steps: int = 4
     face_dense: bool = False    # the density reaches the box's faces: sun_depth_tex holds D / length (sun_depth)
 
@@ -119,6 +120,16 @@ class Medium:
         for i in range(self.near_steps):
             acc += self.rho(p + s * ((i + 0.5) * h)) * h
         return acc + dr.select(to_face, 0.0, self._depth_lookup(p + s * length, dr.maximum(t_far - length, 0.0)))
+
+    def homogeneous(self, block: int) -> tuple:
+        """The homogeneous balls of the density in cells of ``block`` voxels
+        (:func:`natscene.scatter.jumps.homogeneous_radii`), found once."""
+        self.balls = self.balls or {}
+        if block not in self.balls:
+            from natscene.scatter.jumps import homogeneous_radii
+            d = np.asarray(self.volume.density)
+            self.balls[block] = homogeneous_radii(d, (self.bbox_max - self.bbox_min) / np.array(d.shape[::-1]), block)
+        return self.balls[block]
 
     def ground_sun_depth(self, p, src):
         """D(x_g) (world units) at the ground points x_g (y = 0) that the rays from world points ``p`` along the

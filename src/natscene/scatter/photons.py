@@ -358,6 +358,54 @@ class _Walk:
     split_max: int
     similarity: object    # None, or (first order, 1 - g, log g): high-order similarity (:func:`_walk`)
     p1: object = None     # None, or (first order, the numerators' size): P1 tallies (:func:`_walk`)
+    jumps: object = None  # None, or (radius per majorant cell, collisions, exit cosines, 1 - g, g, any order):
+                          # diffusion jumps (:func:`_jump`)
+
+
+def _jump(s: _Walk, p, w, k, vis_p, live, rng):
+    """Diffusion jumps (:mod:`.jumps`) of the ``live`` photons at p whose majorant cell allows a ball of at least the
+    smallest radius of :data:`natscene.scatter.jumps.BALL_RADII` (similar mean free paths, sigma_t (1 - g)): the
+    largest ball of the ladder that fits; the photon moves to a uniform point of its sphere, flies on in a
+    direction at one precomputed walk's exit cosine to the outward normal, and its order grows by that walk's
+    collisions N, each a geometric number of real ones (K = N + NegBin(N, 1 - g), its normal approximation).
+    The ``live`` lanes are those whose photon scatters isotropically at its next collision: where g is not
+    (:data:`ISOTROPIC_G`), only photons in the similar medium (``similarity_order``). A photon of the exact walk at
+    g 0.85 would lose the drift along its direction that its next forward scatterings carry (g / (1 - g) mean free
+    paths): the transmittance of a slab of optical depth 100 read 0.88 of adding-doubling with jumps from any
+    collision, 0.98 without.
+    Returns p, w, k, vis_p, the jumped lanes and those whose order passed ``max_order`` (dropped). Only the jumping
+    lanes draw random numbers: a walk that never jumps is the walk without jumps, number for number."""
+    from natscene.scatter.jumps import BALL_RADII, BALL_SAMPLES
+    radius, n_tab, mu_tab, one_minus_g, g, _ = s.jumps
+    cx, cy, cz = s.grid.shape
+    c = (p - s.lo) / mi.ScalarVector3f(*[float(v) for v in s.grid.cell])
+    cell = (mi.UInt32(dr.clip(dr.floor(c.z), 0, cz - 1)) * cy + mi.UInt32(dr.clip(dr.floor(c.y), 0, cy - 1))) * cx \
+        + mi.UInt32(dr.clip(dr.floor(c.x), 0, cx - 1))
+    r_world = dr.gather(mi.Float, radius, cell, live)
+    sig = s.sig_k * s.med.rho(p) * one_minus_g
+    avail = sig * r_world
+    r0 = float(BALL_RADII[0])
+    step = math.log(float(BALL_RADII[1] / BALL_RADII[0]))
+    ok = live & (avail >= r0)
+    i = mi.UInt32(dr.clip(dr.floor(dr.log(dr.maximum(avail, r0) / r0) / step), 0, len(BALL_RADII) - 1))
+    r_ball = r0 * dr.exp(mi.Float(i) * step) / dr.maximum(sig, 1e-30)
+    j = i * BALL_SAMPLES + mi.UInt32(dr.minimum(rng.next_float32(ok) * BALL_SAMPLES, BALL_SAMPLES - 1))
+    n = mi.Float(dr.gather(mi.UInt32, n_tab, j, ok))
+    mu = dr.gather(mi.Float, mu_tab, j, ok)
+    cz = 1.0 - 2.0 * rng.next_float32(ok)
+    phi = 2.0 * math.pi * rng.next_float32(ok)
+    sz = dr.safe_sqrt(1.0 - cz * cz)
+    normal = mi.Vector3f(sz * dr.cos(phi), sz * dr.sin(phi), cz)
+    phi_w = 2.0 * math.pi * rng.next_float32(ok)
+    s_mu = dr.safe_sqrt(1.0 - mu * mu)
+    w_out = dr.normalize(mi.Frame3f(normal).to_world(mi.Vector3f(s_mu * dr.cos(phi_w), s_mu * dr.sin(phi_w), mu)))
+    u1, u2 = rng.next_float32(ok), rng.next_float32(ok)
+    z = dr.safe_sqrt(-2.0 * dr.log(1.0 - u1)) * dr.cos(2.0 * math.pi * u2)
+    real = dr.maximum(dr.round((n + z * dr.safe_sqrt(n * g)) / one_minus_g), n)
+    k = dr.select(ok, k + mi.UInt32(dr.minimum(real, float(s.max_order))), k)
+    over = ok & (k >= s.max_order)
+    return (dr.select(ok, p + normal * r_ball, p), dr.select(ok, w_out, w), k, dr.select(ok, 0.0, vis_p), ok,
+            over)
 
 
 @dr.syntax
@@ -422,9 +470,10 @@ def _walk(s: _Walk, rec_p, rec_w, rec_wts, rec_mult, rec_k, rec_vis, rec_state, 
     spawned = mi.UInt32(0)
     collided = mi.UInt32(0)
     red = mi.Bool(False)                    # the flight is in the similar medium (sigma_t (1 - g), g = 0)
+    jumped = mi.Bool(False)                 # the photon has just jumped across a ball (:mod:`.jumps`)
     while dr.hint(active, include=[rng]):
         # a new flight: after a collision (k > 0) the photon scatters first
-        turn = start & (k > 0)
+        turn = start & (k > 0) & ~jumped        # a jump's photon leaves its ball mid-flight
         g_l, sig_l, boost = s.g, s.sig_k, mi.Float(1.0)
         if s.similarity is not None:
             first, one_minus_g, _ = s.similarity
@@ -479,7 +528,7 @@ def _walk(s: _Walk, rec_p, rec_w, rec_wts, rec_mult, rec_k, rec_vis, rec_state, 
         step = mi.UInt32(1)
         if s.similarity is not None:  # a similar collision stands for K real ones, P(K = n) = (1 - g) g^(n - 1)
             log_g = s.similarity[2]
-            extra = dr.floor(dr.log(1.0 - rng.next_float32()) / log_g)
+            extra = dr.floor(dr.log(1.0 - rng.next_float32(accept & red)) / log_g)
             step = dr.select(red, mi.UInt32(dr.minimum(extra, float(s.max_order))) + 1, 1)
         k = dr.select(accept, k + step, k)
         collided += dr.select(accept, 1, 0)
@@ -510,6 +559,14 @@ def _walk(s: _Walk, rec_p, rec_w, rec_wts, rec_mult, rec_k, rec_vis, rec_state, 
                 dr.scatter(spawn["wts"][c], wts[c], at, split)
             spawned += dr.select(split, 1, 0)
             goes_on = keep
+        jumped = mi.Bool(False)
+        if s.jumps is not None:
+            p, w, k, vis_p, jumped, over = _jump(s, p, w, k, vis_p, goes_on & (red | s.jumps[5]), rng)
+            left = mi.Float(0.0)
+            for c in range(nch):
+                left += wts[c]
+            dr.scatter_reduce(dr.ReduceOp.Add, s.trunc, _fixed(left), 0, over)
+            goes_on = goes_on & ~over
         dead = missed | escaped | (accept & ~goes_on)
         # a lane whose photon died takes its next record
         rec = dr.select(dead, rec + lanes, rec)
@@ -562,11 +619,39 @@ def _copies(spawn: dict, spawned, lanes: int, cap: int, seed: int, stream: int):
     return recs, total, stream + total
 
 
+#: below this asymmetry a collision scatters nearly isotropically: every photon may jump, and there is no similar
+#: medium (``similarity_order`` needs g above it)
+ISOTROPIC_G = 0.05
+
+
+def _jump_tables(med, grid: MajorantGrid, depth, sig_k: float, g: float):
+    """The diffusion jumps' arrays (:attr:`_Walk.jumps`) for the camera depth ``depth``
+    (:class:`natscene.scatter.inscatter.CameraDepth`) at extinction ``sig_k`` per unit density: the jump radius per
+    cell of ``grid`` (the homogeneous balls are found once per medium:
+    :meth:`natscene.scatter.medium.Medium.homogeneous`), the precomputed walks' collisions and exit cosines; None
+    where no cell allows a jump (the walk then carries no jump code)."""
+    from natscene.scatter.inscatter import VISIBLE_DEPTH
+    from natscene.scatter.jumps import ball_exits, jump_radii
+    cx, cy, cz = grid.shape
+    b = grid.block
+    low = np.full((cz * b, cy * b, cx * b), -np.inf)
+    lower = depth.lower()
+    low[:lower.shape[0], :lower.shape[1], :lower.shape[2]] = lower
+    low = low.reshape(cz, b, cy, b, cx, b).min(axis=(1, 3, 5))
+    radius = jump_radii(*med.homogeneous(b), low, sig_k, VISIBLE_DEPTH)
+    if not np.any(radius > 0):
+        return None
+    n, mu = ball_exits()
+    g = max(float(g), 0.0)
+    return (mi.Float(radius.ravel()), mi.UInt32(n.ravel()), mi.Float(mu.ravel()), dr.opaque(mi.Float, 1.0 - g),
+            dr.opaque(mi.Float, g), g <= ISOTROPIC_G)
+
+
 def trace(med, grid: MajorantGrid, source, sigma: float, g: float, camera_position, n_photons: int, bands,
           caches=((2, None),), seed: int = 0, max_order: int = 4096, k_min: int = 2, batch: int = 2 ** 18,
           progress=None, camera_depth=None, tally_rate: float = 0.0, phase: bool = True,
           window=None, split_max: int = 8, camera_lobe: float = 0.0, similarity_order: int = 0,
-          p1_order: int = 0) -> InscatterTally:
+          p1_order: int = 0, jumps: bool = False) -> InscatterTally:
     """Trace ``n_photons`` from ``source`` through the medium at (sigma, g) and tally the in-scatter caches.
 
     ``caches``: (factor, band indices or None = all bands) per cache; every band goes to exactly one cache.
@@ -582,6 +667,8 @@ def trace(med, grid: MajorantGrid, source, sigma: float, g: float, camera_positi
     ``similarity_order`` > 0 (and g > 0.05): from that order on the photon flies in the similar medium of
     high-order similarity (:func:`_walk`).
     ``p1_order`` > 0: from that order on the tallies take the phase function's P1 part (:func:`_walk`).
+    ``jumps``: a photon deep inside the cloud, where the camera sees nothing (needs ``camera_depth``) and the
+    density is nearly constant, crosses a ball of it in one step (:mod:`.jumps`, :func:`_jump`).
 
     The source's photons are walked by :func:`_walk` in one pass per ``batch`` photons; the copies that pass
     splits off are walked in the next, and so on until no copy is left (2^18 photons a batch keep a main-job node
@@ -636,9 +723,11 @@ def trace(med, grid: MajorantGrid, source, sigma: float, g: float, camera_positi
     if p1_order > 0 and phase:
         s.p1 = (dr.opaque(mi.UInt32, int(p1_order)), total)
         s.accs = [dr.zeros(mi.UInt64, 2 * total) for _ in range(nch)]
-    if similarity_order > 0 and g > 0.05:
+    if similarity_order > 0 and g > ISOTROPIC_G:
         s.similarity = (dr.opaque(mi.UInt32, int(similarity_order)), dr.opaque(mi.Float, 1.0 - float(g)),
                         dr.opaque(mi.Float, math.log(float(g))))
+    if jumps and vis is not None and (g <= ISOTROPIC_G or s.similarity is not None):
+        s.jumps = _jump_tables(med, grid, vis[0], float(sigma) * med.scale, g)
     unit = None     # photon power that one fixed-point unit of FIXED stands for (the first batch's mean)
     collisions = 0
     done = 0
