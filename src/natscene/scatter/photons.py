@@ -362,6 +362,7 @@ class _Walk:
                           # diffusion jumps (:func:`_jump`)
 
 
+@dr.syntax
 def _jump(s: _Walk, p, w, k, vis_p, live, rng):
     """Diffusion jumps (:mod:`.jumps`) of the ``live`` photons at p whose majorant cell allows a ball of at least the
     smallest radius of :data:`natscene.scatter.jumps.BALL_RADII` (similar mean free paths, sigma_t (1 - g)): the
@@ -382,30 +383,34 @@ def _jump(s: _Walk, p, w, k, vis_p, live, rng):
     cell = (mi.UInt32(dr.clip(dr.floor(c.z), 0, cz - 1)) * cy + mi.UInt32(dr.clip(dr.floor(c.y), 0, cy - 1))) * cx \
         + mi.UInt32(dr.clip(dr.floor(c.x), 0, cx - 1))
     r_world = dr.gather(mi.Float, radius, cell, live)
-    sig = s.sig_k * s.med.rho(p) * one_minus_g
-    avail = sig * r_world
     r0 = float(BALL_RADII[0])
     step = math.log(float(BALL_RADII[1] / BALL_RADII[0]))
-    ok = live & (avail >= r0)
-    i = mi.UInt32(dr.clip(dr.floor(dr.log(dr.maximum(avail, r0) / r0) / step), 0, len(BALL_RADII) - 1))
-    r_ball = r0 * dr.exp(mi.Float(i) * step) / dr.maximum(sig, 1e-30)
-    j = i * BALL_SAMPLES + mi.UInt32(dr.minimum(rng.next_float32(ok) * BALL_SAMPLES, BALL_SAMPLES - 1))
-    n = mi.Float(dr.gather(mi.UInt32, n_tab, j, ok))
-    mu = dr.gather(mi.Float, mu_tab, j, ok)
-    cz = 1.0 - 2.0 * rng.next_float32(ok)
-    phi = 2.0 * math.pi * rng.next_float32(ok)
-    sz = dr.safe_sqrt(1.0 - cz * cz)
-    normal = mi.Vector3f(sz * dr.cos(phi), sz * dr.sin(phi), cz)
-    phi_w = 2.0 * math.pi * rng.next_float32(ok)
-    s_mu = dr.safe_sqrt(1.0 - mu * mu)
-    w_out = dr.normalize(mi.Frame3f(normal).to_world(mi.Vector3f(s_mu * dr.cos(phi_w), s_mu * dr.sin(phi_w), mu)))
-    u1, u2 = rng.next_float32(ok), rng.next_float32(ok)
-    z = dr.safe_sqrt(-2.0 * dr.log(1.0 - u1)) * dr.cos(2.0 * math.pi * u2)
-    real = dr.maximum(dr.round((n + z * dr.safe_sqrt(n * g)) / one_minus_g), n)
-    k = dr.select(ok, k + mi.UInt32(dr.minimum(real, float(s.max_order))), k)
-    over = ok & (k >= s.max_order)
-    return (dr.select(ok, p + normal * r_ball, p), dr.select(ok, w_out, w), k, dr.select(ok, 0.0, vis_p), ok,
-            over)
+    sig_k, rho, most = s.sig_k, s.med.rho, float(s.max_order)   # (the branch reads no member of s)
+    ok = mi.Bool(False)
+    if dr.hint(live & (r_world > 0), mode="symbolic"):     # a branch: a packet without a ball skips it
+        sig = sig_k * rho(p) * one_minus_g
+        avail = sig * r_world
+        ok = avail >= r0
+        i = mi.UInt32(dr.clip(dr.floor(dr.log(dr.maximum(avail, r0) / r0) / step), 0, len(BALL_RADII) - 1))
+        r_ball = r0 * dr.exp(mi.Float(i) * step) / dr.maximum(sig, 1e-30)
+        j = i * BALL_SAMPLES + mi.UInt32(dr.minimum(rng.next_float32(ok) * BALL_SAMPLES, BALL_SAMPLES - 1))
+        n = mi.Float(dr.gather(mi.UInt32, n_tab, j, ok))
+        mu = dr.gather(mi.Float, mu_tab, j, ok)
+        nz_ = 1.0 - 2.0 * rng.next_float32(ok)
+        phi = 2.0 * math.pi * rng.next_float32(ok)
+        sz = dr.safe_sqrt(1.0 - nz_ * nz_)
+        normal = mi.Vector3f(sz * dr.cos(phi), sz * dr.sin(phi), nz_)
+        phi_w = 2.0 * math.pi * rng.next_float32(ok)
+        s_mu = dr.safe_sqrt(1.0 - mu * mu)
+        w_out = dr.normalize(mi.Frame3f(normal).to_world(mi.Vector3f(s_mu * dr.cos(phi_w), s_mu * dr.sin(phi_w), mu)))
+        u1, u2 = rng.next_float32(ok), rng.next_float32(ok)
+        z = dr.safe_sqrt(-2.0 * dr.log(1.0 - u1)) * dr.cos(2.0 * math.pi * u2)
+        real = dr.maximum(dr.round((n + z * dr.safe_sqrt(n * g)) / one_minus_g), n)
+        k = dr.select(ok, k + mi.UInt32(dr.minimum(real, most)), k)
+        p = dr.select(ok, p + normal * r_ball, p)
+        w = dr.select(ok, w_out, w)
+        vis_p = dr.select(ok, 0.0, vis_p)
+    return p, w, k, vis_p, ok, ok & (k >= s.max_order)
 
 
 @dr.syntax
