@@ -21,7 +21,7 @@ across a slab of optical depth tau then costs O(log tau) jumps for each of its e
 zone instead of O(tau^2) collisions.
 
 The balls are walked in the similar medium of first-order similarity (sigma_t (1 - g), isotropic: Wyman et al.
-1989; Zhao, Wu, Ramamoorthi & Bala 2014): each similar collision stands for a geometric number of real ones, so the
+1989; Zhao, Ramamoorthi & Bala 2014): each similar collision stands for a geometric number of real ones, so the
 order grows by K = N + NegBin(N, 1 - g), drawn from its normal approximation (mean N / (1 - g), variance
 N g / (1 - g)^2): the closed-form albedo of the bands, beta^K, holds in the mean and in the spread.
 
@@ -40,8 +40,8 @@ References
     polydisperse granular media. ACM Transactions on Graphics, 35(6).
 -   Wyman, D. R., Patterson, M. S., & Wilson, B. C. (1989). Similarity relations for the interaction parameters in
     radiation transport. Applied Optics, 28(24).
--   Zhao, S., Wu, L., Durand, F., & Ramamoorthi, R. (2016) / Zhao, S., Ramamoorthi, R., & Bala, K. (2014).
-    High-order similarity relations in radiative transfer. ACM Transactions on Graphics, 33(4).
+-   Zhao, S., Ramamoorthi, R., & Bala, K. (2014). High-order similarity relations in radiative transfer. ACM
+    Transactions on Graphics, 33(4).
 """
 from __future__ import annotations
 
