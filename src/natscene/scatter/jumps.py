@@ -50,7 +50,7 @@ from functools import lru_cache
 import numba
 import numpy as np
 
-__all__ = ["BALL_RADII", "BALL_SAMPLES", "TOLERANCE", "ball_exits", "homogeneous_radii", "jump_radii"]
+__all__ = ["BALL_RADII", "BALL_SAMPLES", "TOLERANCE", "ball_exits", "cell_reduce", "homogeneous_radii", "jump_radii"]
 
 #: the balls' radii in (similar) mean free paths: a ladder from 4 (a jump saves about R^2 / 2 = 8 collisions; a
 #: smaller one costs about what it saves) to 64 (2000 collisions), ratio 2^(1/3)
@@ -106,6 +106,17 @@ def ball_exits(samples: int = BALL_SAMPLES, seed: int = 12345) -> tuple[np.ndarr
     return n, mu
 
 
+def cell_reduce(values: np.ndarray, block: int, reduce=np.min, fill: float = 0.0) -> np.ndarray:
+    """``reduce`` (np.min or np.max) of voxel ``values`` [nz, ny, nx] over cells of ``block`` voxels (the majorant
+    grid's), the partial cells at the far faces padded with ``fill``."""
+    nz, ny, nx = values.shape
+    b = max(1, int(block))
+    cz, cy, cx = -(-nz // b), -(-ny // b), -(-nx // b)
+    pad = np.full((cz * b, cy * b, cx * b), fill, np.asarray(values).dtype)
+    pad[:nz, :ny, :nx] = values
+    return reduce(pad.reshape(cz, b, cy, b, cx, b), axis=(1, 3, 5))
+
+
 def homogeneous_radii(density: np.ndarray, voxel_size, block: int = 4,
                       tolerance: float = TOLERANCE) -> tuple[np.ndarray, np.ndarray]:
     """Per cell of ``block`` voxels [cz, cy, cx] (the majorant grid's, :mod:`.majorant`): the radius (world units)
@@ -116,15 +127,9 @@ def homogeneous_radii(density: np.ndarray, voxel_size, block: int = 4,
     radii of half a cell's smallest side times 2^(j/2)."""
     from scipy.ndimage import maximum_filter, minimum_filter
     d = np.asarray(density, np.float32)
-    nz, ny, nx = d.shape
     b = max(1, int(block))
-    cz, cy, cx = -(-nz // b), -(-ny // b), -(-nx // b)
-    lo = np.zeros((cz * b, cy * b, cx * b), np.float32)
-    hi = np.zeros_like(lo)
-    lo[:nz, :ny, :nx] = minimum_filter(d, size=3, mode="constant", cval=0.0)
-    hi[:nz, :ny, :nx] = maximum_filter(d, size=3, mode="constant", cval=0.0)
-    mn = lo.reshape(cz, b, cy, b, cx, b).min(axis=(1, 3, 5))
-    mx = hi.reshape(cz, b, cy, b, cx, b).max(axis=(1, 3, 5))
+    mn = cell_reduce(minimum_filter(d, size=3, mode="constant", cval=0.0), b, np.min)
+    mx = cell_reduce(maximum_filter(d, size=3, mode="constant", cval=0.0), b, np.max)
     cell = np.asarray(voxel_size, np.float64)[::-1] * b          # (z, y, x) sides
     radius = np.zeros(mn.shape, np.float64)
     top = np.zeros(mn.shape, np.float64)

@@ -636,14 +636,9 @@ def _jump_tables(med, grid: MajorantGrid, depth, sig_k: float, g: float):
     :meth:`natscene.scatter.medium.Medium.homogeneous`), the precomputed walks' collisions and exit cosines; None
     where no cell allows a jump (the walk then carries no jump code)."""
     from natscene.scatter.inscatter import VISIBLE_DEPTH
-    from natscene.scatter.jumps import ball_exits, jump_radii
-    cx, cy, cz = grid.shape
-    b = grid.block
-    low = np.full((cz * b, cy * b, cx * b), -np.inf)
-    lower = depth.lower()
-    low[:lower.shape[0], :lower.shape[1], :lower.shape[2]] = lower
-    low = low.reshape(cz, b, cy, b, cx, b).min(axis=(1, 3, 5))
-    radius = jump_radii(*med.homogeneous(b), low, sig_k, VISIBLE_DEPTH)
+    from natscene.scatter.jumps import ball_exits, cell_reduce, jump_radii
+    low = cell_reduce(depth.lower(), grid.block, np.min, -np.inf)
+    radius = jump_radii(*med.homogeneous(grid.block), low, sig_k, VISIBLE_DEPTH)
     if not np.any(radius > 0):
         return None
     n, mu = ball_exits()
