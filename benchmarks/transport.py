@@ -98,7 +98,7 @@ def repeated_noise(vol, camera, sun, settings, nodes=((0.2, 0.85), (0.5, 0.85)),
     ``beta`` from ``reps`` independent runs of a node (2 halves each): median and p95 over the cloud pixels, and
     the seconds per node."""
     from natscene.scatter.allorders import Lighting, Scene, view_images
-    from natscene.scatter.bands import band_weights
+    from natscene.scatter.bands import band_weights, channel_weights
     from natscene.scatter.single import march_view
     from natscene.scatter.transport.all_orders import skylight_dome
     out = {}
@@ -112,10 +112,10 @@ def repeated_noise(vol, camera, sun, settings, nodes=((0.2, 0.85), (0.5, 0.85)),
             for r in range(reps):
                 vi = view_images(scene, camera, sigma, g, seed=1000 + r)
                 cs = band_weights(st.sun_bands, vi.sun_orders, beta)[0]
-                ck = band_weights(st.sky_bands, vi.sky_orders, beta)[0]
+                ck = channel_weights(st.sky_bands, vi.sky_orders, beta)[0]
                 for h in range(2):
                     halves["sun"].append(np.tensordot(cs, vi.sun_halves[h], 1))
-                    halves["sky"].append(np.tensordot(ck, vi.sky_halves[h][:3].sum(0), 1))
+                    halves["sky"].append(np.tensordot(ck[:3], vi.sky_halves[h][:3], 2))
             per_node = (time.perf_counter() - t0) / reps
             for key, x in halves.items():
                 x = np.asarray(x, np.float64)

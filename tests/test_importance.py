@@ -34,7 +34,7 @@ def _tally(scene, source, window, seed, n=60_000, sigma=1.0, g=0.6, camera_lobe=
               k_min=1, camera_depth=voxel_camera_depth(scene.med, CAM.position), window=window,
               camera_lobe=camera_lobe)
     bands = t.numerators[0].sum(axis=0)
-    return np.array([bands[0].sum(), bands[1].sum(), t.histogram[2:5].sum(), t.histogram[5:].sum()]), t.collisions
+    return np.array([bands[0].sum(), bands[1].sum(), t.histogram[0, 2:5].sum(), t.histogram[0, 5:].sum()]), t.collisions
 
 
 def test_any_window_keeps_the_expected_tallies():

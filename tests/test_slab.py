@@ -38,7 +38,7 @@ import pytest
 import natscene  # noqa: F401
 from natscene.config import default_settings
 from natscene.scatter.allorders import AllOrdersSettings, Lighting, Scene, view_images
-from natscene.scatter.bands import band_weights
+from natscene.scatter.bands import channel_weights
 from natscene.scatter.reference_scene import (adding_doubling, adding_doubling_flux, comparison_slab, slab_camera,
                                               slab_sun, slab_sun_radiance, slab_width)
 from natscene.scatter.skylight import uniform_dome
@@ -84,7 +84,7 @@ def dome_radiance(tau: float, g: float, mu: float, above: bool, seeds) -> dict:
     for seed in seeds:
         vi = view_images(scene, cam, 1.0, g, seed=seed)
         for b in BETAS:
-            out[b] += float(np.tensordot(band_weights(DOME.sky_bands, vi.sky_orders, b)[0], vi.sky[0], 1).mean()
+            out[b] += float(np.tensordot(channel_weights(DOME.sky_bands, vi.sky_orders, b)[0, 0], vi.sky[0], 1).mean()
                             ) / len(seeds)
     return out
 
@@ -110,26 +110,28 @@ def _check(got: dict, refs: dict, label: str):
 # its entry goes.
 NOISE = ("the light that crosses the slab comes from few photons at this budget (131,072: at tau 100 about one in 60 "
          "crosses, at 300 one in 150, a seventh of them under the view): one run scatters by 10-20 %")
-BAND_MIX = ("beta < 1: one order distribution per band for the whole cloud (what the camera sees of the slab, its "
-            "edges included), where the light transmitted through the slab's middle walks far longer")
+BAND_MIX = ("beta < 1: one order distribution per band for the whole view, where the grazing views of the flux "
+            "integral see the finite slab's ends beside its middle, whose transmitted light walks far longer")
 FACE = ("the cache's interpolation holds a face cell's mean over the half cell at the face (a field rising linearly "
         "from the face: +0.8 % in layers of 0.625 mean free paths, +3 % in layers of 2; test_scatter)")
+LAYERS = ("the sky-lit transmitted light at g 0.85 depends on the voxel layers' thickness, not located (two runs: tau 10 "
+          "1.085 / 0.997 / 0.990 in 16 / 32 / 64 layers, tau 100 1.114 / 1.006 in 50 / 100)")
 GAPS = {
-    ("radiance", 10.0, 60, False): "2.3-3.3 % high (the sun at 0 degrees: 0.995): " + FACE + ", and 2 % not located",
+    ("radiance", 10.0, 60, False): "2.3-2.8 % high (the sun at 0 degrees: 0.995): " + FACE + ", and 2 % not located",
     ("radiance", 100.0, 0, True): "2.3-2.5 % high at beta >= 0.9999: " + FACE,
-    ("radiance", 100.0, 0, False): "1.06-1.07 at beta >= 0.9999: " + NOISE,
-    ("radiance", 100.0, 60, False): "0.89-0.90 at beta >= 0.9999: " + NOISE,
-    ("radiance", 300.0, 0, False): "1.16 at beta 1, 1.34 at 0.9999: " + NOISE + "; " + BAND_MIX,
-    ("radiance", 300.0, 60, False): "1.06 at beta 1, 1.79 at 0.9999: " + NOISE + "; " + BAND_MIX,
-    ("normal", 100.0, False): "1.63 times at beta 0.99 (beta >= 0.9999: 0.977-0.981): " + BAND_MIX,
-    ("normal", 300.0, True): "2.3 % low at beta 0.99 (0.991 at beta >= 0.9999): not located",
-    ("normal", 300.0, False): "1.20-1.26 at beta >= 0.9999: " + NOISE + "; beta 0.99: " + BAND_MIX,
-    ("oblique", 10.0, False): "6.1-8.2 % high: not located",
-    ("oblique", 100.0, False): "1.12-1.19 at beta >= 0.9999, 56 times at 0.99: " + BAND_MIX + " (the sky's three "
-                               "bands); " + NOISE,
-    ("oblique", 300.0, True): "2.2-2.3 % high at beta >= 0.9999 (1.001-1.009 with the walks cut at 4096 orders): "
-                              + FACE,
-    ("oblique", 300.0, False): "0.88 at beta 1, 1.57 at 0.9999, 1e-2 for 8e-10 at 0.99: " + NOISE + "; " + BAND_MIX,
+    ("radiance", 100.0, 0, False): "1.06 at beta >= 0.9999: " + NOISE,
+    ("radiance", 100.0, 60, False): "0.88-0.89 at beta >= 0.9999: " + NOISE,
+    ("radiance", 300.0, 0, False): "1.16 at beta 1, 1.11 at 0.9999: " + NOISE,
+    ("radiance", 300.0, 60, False): "1.06 at beta 1, 1.33 at 0.9999: " + NOISE + " (the orders' tail, where beta^k "
+                                    "falls, too)",
+    ("normal", 100.0, False): "1.31 times at beta 0.99 (beta >= 0.9999: 0.977-0.980): " + BAND_MIX,
+    ("normal", 300.0, True): "2.4 % low at beta 0.99 (0.992 at beta >= 0.9999): not located",
+    ("normal", 300.0, False): "1.20-1.25 at beta >= 0.9999: " + NOISE + "; beta 0.99: 5e-5 for 1e-9: " + BAND_MIX,
+    ("oblique", 10.0, False): "6.1-6.3 % high: " + LAYERS,
+    ("oblique", 100.0, False): "1.12 at beta >= 0.9999: " + LAYERS + "; beta 0.99: 0.964 (2.3e-5 below, the floor "
+                               "2e-5)",
+    ("oblique", 300.0, True): "2.3-2.4 % high (1.001-1.009 with the walks cut at 4096 orders): " + FACE,
+    ("oblique", 300.0, False): "0.88 at beta 1, 0.84 at 0.9999: " + NOISE,
 }
 
 

@@ -22,7 +22,7 @@ import natscene  # noqa: F401
 from natscene.config import default_settings
 from natscene.geometry import Camera
 from natscene.scatter.allorders import AllOrdersSettings, Lighting, Scene, frame_settings, view_images
-from natscene.scatter.bands import band_weights
+from natscene.scatter.bands import channel_weights
 from natscene.scatter.compose import compose
 from natscene.scatter.reference_scene import CAM, K, NOSKY, SETTINGS, SUN, band_ratios, blob_volume
 from natscene.scatter.render import render
@@ -115,8 +115,8 @@ def test_white_furnace_at_depth_300():
     means = []
     for seed in (4, 5, 6, 7):
         vi = view_images(scene, CAM, sigma, 0.85, seed=seed)
-        c = band_weights(st.sky_bands, vi.sky_orders, 1.0)[0]
-        sky = np.tensordot(c, np.moveaxis(vi.sky, 1, 0), 1)
+        c = channel_weights(st.sky_bands, vi.sky_orders, 1.0)[0]
+        sky = np.einsum("cb,cbhw->chw", c, vi.sky)
         img = sky[0] + sky[3] * L + T * L
         means.append(img[cloud].mean() / L)
     print(f"white furnace, mean depth 300: runs {np.round(means, 4)}, mean {np.mean(means):.4f}")

@@ -20,7 +20,8 @@ import natscene  # noqa: F401
 from natscene.config import default_settings
 from natscene.errors import ConfigError, InputError
 from natscene.scatter.allorders import AllOrdersSettings, Lighting, Scene, frame_settings, view_images
-from natscene.scatter.bands import ORDER_BINS, SUN_BANDS, band_table, band_weights, check_bands, order_distribution
+from natscene.scatter.bands import (ORDER_BINS, SUN_BANDS, band_table, band_weights, channel_weights, check_bands,
+                                    order_distribution)
 from natscene.scatter.compose import compose
 from natscene.scatter.mitsuba_scene import render_reference
 from natscene.scatter.reference_scene import (BETAS, CAM, GS, K, NOSKY, SETTINGS, SIGMAS, SUN, blob_volume,
@@ -179,8 +180,8 @@ def test_white_furnace():
     scene = Scene(vol, Lighting(SUN, uniform_dome(L)), st)
     for sigma in (0.3, 1.0):
         vi = view_images(scene, CAM, sigma, 0.85, seed=4)
-        c = band_weights(st.sky_bands, vi.sky_orders, 1.0)[0]
-        sky = np.tensordot(c, np.moveaxis(vi.sky, 1, 0), 1)          # (4, H, W) at beta = 1
+        c = channel_weights(st.sky_bands, vi.sky_orders, 1.0)[0]
+        sky = np.einsum("cb,cbhw->chw", c, vi.sky)                   # (4, H, W) at beta = 1
         from natscene.scatter.single import march_view
         T = march_view(scene.med, CAM, [sigma])["T"][0]
         img = sky[0] + sky[3] * L + T * L          # the dome's R channel + the unit-radiance ground basis at L
@@ -197,6 +198,11 @@ def _heavy_tail(n: int = 65537, seed: int = 0) -> np.ndarray:
     k = np.arange(n, dtype=np.float64)
     h = np.where(k >= 1, np.maximum(k, 1) ** -1.5 * np.exp(-k / 1500), 0.0)
     return h * np.random.default_rng(seed).uniform(0.5, 1.5, n)
+
+
+def _ground_tail(seed: int) -> np.ndarray:
+    """An order histogram of light that needs few orders (the ground's, entering a cloud's base): orders < 40."""
+    return _heavy_tail(seed=seed) * (np.arange(65537) < 40)
 
 
 def test_band_weights_against_the_explicit_sum_over_orders():
@@ -368,8 +374,9 @@ def test_all_orders_compose_is_the_explicit_sum_over_nodes_and_bands():
                sky_ms=rng.random((4, len(kb), Ng, Ns, H, W), np.float32),
                sun_orders=np.stack([[order_distribution(sb, _heavy_tail(seed=Ns * j + i)) for i in range(Ns)]
                                     for j in range(Ng)]),
-               sky_orders=np.stack([[order_distribution(kb, _heavy_tail(seed=99 + Ns * j + i)) for i in range(Ns)]
-                                    for j in range(Ng)]))
+               sky_orders=np.stack([[order_distribution(kb, [_heavy_tail(seed=99 + Ns * j + i),  # the dome's
+                                                             _ground_tail(seed=199 + Ns * j + i)])   # the ground's
+                                     for i in range(Ns)] for j in range(Ng)]))
     P = 7
     p = {"L_in": rng.uniform(1, 8, P), "g": rng.uniform(-0.2, 0.95, P), "extinction": rng.uniform(0.05, 1.2, P),
          "beta": rng.uniform(0.9, 1.0, P), "L_amb": np.zeros(P), "c_in": rng.uniform(0.5, 1.5, (P, 3)),
@@ -390,9 +397,9 @@ def test_all_orders_compose_is_the_explicit_sum_over_nodes_and_bands():
             expect[j] += ws * (single[..., None] * p["c_in"][j] + t.transmittance[si][..., None] * sky)
             for gi, wg in bracket(gs, g):
                 cs = band_weights(sb, t.sun_orders[gi, si], b)[0]
-                ck = band_weights(kb, t.sky_orders[gi, si], b)[0]
+                ck = [band_weights(kb, t.sky_orders[gi, si, 0 if c < 3 else 1], b)[0] for c in range(4)]
                 sun = np.tensordot(cs, t.sun_ms[:, gi, si], 1)
-                k = np.tensordot(ck, t.sky_ms[:, :, gi, si], axes=(0, 1))              # (4, H, W)
+                k = np.stack([np.tensordot(ck[c], t.sky_ms[c, :, gi, si], 1) for c in range(4)])   # (4, H, W)
                 expect[j] += wg * ws * (p["L_in"][j] * sun[..., None] * p["c_in"][j]
                                         + np.moveaxis(k[:3], 0, -1) * p["sky_scale"][j] + k[3][..., None] * G)
     for backend in ("numpy", "auto"):

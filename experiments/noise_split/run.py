@@ -46,7 +46,7 @@ from natscene.config import load_yaml_config, validate_config
 from natscene.geometry import Camera, sun_direction
 from natscene.phase import hg
 from natscene.scatter.allorders import Lighting, Scene, settings_from_config, standard_error, view_images
-from natscene.scatter.bands import band_weights
+from natscene.scatter.bands import band_weights, channel_weights
 from natscene.scatter.medium import make_medium
 from natscene.scatter.single import march_view
 from natscene.scatter.transport.all_orders import skylight_dome, sky_luminance_weights
@@ -60,10 +60,10 @@ BETA = 0.99
 def parts(vi, st, sky_w):
     """The halves of each part at BETA: sun orders >= 2, sky order 1, sky orders >= 2 (luminance)."""
     cs = band_weights(st.sun_bands, vi.sun_orders, BETA)[0]
-    ck = band_weights(st.sky_bands, vi.sky_orders, BETA)[0]
+    ck = channel_weights(st.sky_bands, vi.sky_orders, BETA)[0] * np.asarray(sky_w)[:, None]     # (4, B)
     out = {"sun_multiple": [np.tensordot(cs, vi.sun_halves[h], 1) for h in range(2)]}
     for name, sel in (("sky_order1", slice(0, 1)), ("sky_multiple", slice(1, None))):
-        out[name] = [np.tensordot(ck[sel], np.tensordot(sky_w, vi.sky_halves[h], 1)[sel], 1) for h in range(2)]
+        out[name] = [np.tensordot(ck[:, sel], vi.sky_halves[h][:, sel], 2) for h in range(2)]
     return out
 
 

@@ -29,7 +29,7 @@ from natscene.config import load_yaml_config, validate_config  # noqa: E402
 from natscene.geometry import Camera, sun_direction  # noqa: E402
 from natscene.phase import hg  # noqa: E402
 from natscene.scatter.allorders import Lighting, Scene, settings_from_config, standard_error, view_images  # noqa: E402
-from natscene.scatter.bands import band_weights  # noqa: E402
+from natscene.scatter.bands import band_weights, channel_weights  # noqa: E402
 from natscene.scatter.single import march_view  # noqa: E402
 from natscene.scatter.transport.all_orders import skylight_dome, sky_luminance_weights  # noqa: E402
 from natscene.sky.daylight import skylight  # noqa: E402
@@ -76,11 +76,11 @@ def main():
             vi = view_images(scene, camera, sigma, g, seed=5)
             t_node = time.perf_counter() - t0
             cs = band_weights(st.sun_bands, vi.sun_orders, BETA)[0]
-            ck = band_weights(st.sky_bands, vi.sky_orders, BETA)[0]
+            ck = channel_weights(st.sky_bands, vi.sky_orders, BETA)[0]         # (4, B)
             sun = [np.tensordot(cs, vi.sun_halves[h], 1) for h in range(2)]
-            sky_all = [np.tensordot(ck, np.tensordot(sky_w, vi.sky_halves[h], 1), 1) for h in range(2)]
-            ph1 = [ck[0] * np.tensordot(sky_w, vi.sky_halves[h][:, 0], 1) for h in range(2)]
-            pa1 = [ck[0] * np.tensordot(sky_w, paths[h][:, j], 1) for h in range(2)]
+            sky_all = [np.tensordot(ck * sky_w[:, None], vi.sky_halves[h], 2) for h in range(2)]
+            ph1 = [np.tensordot(ck[:, 0] * sky_w, vi.sky_halves[h][:, 0], 1) for h in range(2)]
+            pa1 = [np.tensordot(ck[:, 0] * sky_w, paths[h][:, j], 1) for h in range(2)]
             pixel = BETA * hg(cos_q, g) * single["S_sun"][0] + (sun[0] + sun[1]) / 2 + (sky_all[0] + sky_all[1]) / 2
             ok = foot & (pixel > 0)
             row = {"node_seconds": round(t_node, 1), "paths_seconds_all_g": round(t_paths, 1),

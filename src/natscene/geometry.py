@@ -10,6 +10,7 @@ azimuth (degrees from +z toward +x) and elevation (degrees above the horizon):
 -   :func:`sun_direction`: the unit vector toward the sun.
 -   :func:`rotate`: a vector rotated about an axis (Rodrigues' formula).
 -   :func:`ray_box`, :func:`box_coverage`: rays against an axis-aligned box, and the share of a frame that sees it.
+-   :func:`frame_voxels`: the voxels of a grid that a camera's frame sees.
 
 Pixel (i, j) (row i from the top, column j from the left) looks through its centre. The image's right
 is ``right = normalize(forward x up)``, matching Mitsuba's ``perspective`` sensor with ``fov_axis='y'``
@@ -21,7 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["Camera", "sun_direction", "rotate", "ray_box", "box_coverage"]
+__all__ = ["Camera", "sun_direction", "rotate", "ray_box", "box_coverage", "frame_voxels"]
 
 
 def sun_direction(azimuth_deg: float, elevation_deg: float) -> np.ndarray:
@@ -113,3 +114,28 @@ def box_coverage(camera: Camera, lo, hi, samples: tuple[int, int] = (64, 48)) ->
     o = np.broadcast_to(np.asarray(camera.position, np.float64), d.shape)
     t0, t1 = ray_box(o, d, lo, hi)
     return float(np.mean(t1 >= t0))
+
+
+def frame_voxels(camera: Camera, lo, hi, shape, pad: float = 0.0) -> np.ndarray:
+    """bool [nz, ny, nx]: the voxels of the grid ``shape`` over the box [lo, hi] that the camera's frame sees,
+    each voxel grown by ``pad`` voxels on every side (conservative: a sphere about its centre of radius (pad + 1/2)
+    voxel diagonals, on the inner side of each of the frustum's four planes or within its radius of it)."""
+    nz, ny, nx = (int(n) for n in shape)
+    lo = np.asarray(lo, np.float64)
+    size = (np.asarray(hi, np.float64) - lo) / np.array([nx, ny, nz])
+    right, up, fwd = camera.basis()
+    tan_y = np.tan(np.radians(camera.fov) / 2)
+    tan_x = tan_y * camera.width / camera.height
+    radius = (float(pad) + 0.5) * float(np.linalg.norm(size))
+    out = np.zeros((nz, ny, nx), bool)
+    xs = lo[0] + (np.arange(nx) + 0.5) * size[0] - camera.position[0]
+    ys = lo[1] + (np.arange(ny) + 0.5) * size[1] - camera.position[1]
+    for iz in range(nz):            # one layer at a time: a main-job grid's offsets would take 100 MB at once
+        zc = lo[2] + (iz + 0.5) * size[2] - camera.position[2]
+        d = np.stack(np.broadcast_arrays(xs[None, :], ys[:, None], np.full((1, 1), zc)), -1)
+        z = d @ fwd
+        # the plane u = z tan lies at a distance (|u| - z tan) / sqrt(1 + tan^2) from a centre at (u, z)
+        inside = ((np.abs(d @ right) - z * tan_x <= radius * np.sqrt(1 + tan_x ** 2))
+                  & (np.abs(d @ up) - z * tan_y <= radius * np.sqrt(1 + tan_y ** 2)))
+        out[iz] = inside          # the four half-spaces meet in the frustum alone: none holds points behind
+    return out

@@ -24,8 +24,10 @@ For one view (camera + sun), one sigma_t and one g this module computes, with ph
   the dome's R, G, B radiance distributions and a unit-radiance ground (lower hemisphere); order 1 by shadow rays
   at the fine cache's cells (:mod:`natscene.scatter.sky_first`, ``sky_order1_points`` > 0: one set of points per
   view serves every node, :meth:`Scene.shadow_samples`) or from the sky photons' first flights;
-- the bands' order distributions (:func:`natscene.scatter.bands.order_distribution`), so that any albedo composes in
-  closed form (:func:`natscene.scatter.bands.band_weights`);
+- the bands' order distributions of the light in the camera's frame
+  (:func:`natscene.scatter.bands.order_distribution`; the sky's dome and ground each their own), so that any
+  albedo composes in closed form (:func:`natscene.scatter.bands.band_weights`,
+  :func:`natscene.scatter.bands.channel_weights`);
 - a noise estimate: the photons are traced as two independent halves, and the images of the halves give
   each pixel's standard error (the cache and the gather are linear in the tallies, so the mean of the two
   halves is exactly the result of tracing them together). A caller that needs no noise figure (a shot's frame)
@@ -175,7 +177,7 @@ class ViewImages:
     sun_halves: np.ndarray
     sky_halves: np.ndarray | None
     sun_orders: np.ndarray            # (B_sun, J, 2): natscene.scatter.bands.order_distribution
-    sky_orders: np.ndarray | None     # (B_sky, J, 2)
+    sky_orders: np.ndarray | None     # (2, B_sky, J, 2): the dome's R, G, B and the ground's (bands.SKY_GROUPS)
     stats: dict = field(default_factory=dict)
 
     @property
@@ -215,6 +217,7 @@ class Scene:
         self.shadow_seed = int(shadow_seed)
         self._vox_depth = {}
         self._shadow = {}
+        self._frame = {}
 
     def camera_depth_voxels(self, camera) -> np.ndarray:
         """The voxels' optical depth to the camera (:func:`natscene.scatter.inscatter.voxel_camera_depth`),
@@ -224,6 +227,16 @@ class Scene:
         if key not in self._vox_depth:
             self._vox_depth[key] = voxel_camera_depth(self.med, camera.position)
         return self._vox_depth[key]
+
+    def frame_voxels(self, camera) -> np.ndarray:
+        """The voxels in the camera's frame, each grown by a coarse cache cell (whose tallies the frame's pixels
+        interpolate): where the order histogram counts the light (:func:`natscene.geometry.frame_voxels`)."""
+        from natscene.geometry import frame_voxels
+        key = (camera.position, camera.look_at, camera.up, camera.fov, camera.width, camera.height)
+        if key not in self._frame:
+            self._frame = {key: frame_voxels(camera, self.volume.bbox_min, self.volume.bbox_max,
+                                             self.volume.density.shape, pad=self.factors[1])}
+        return self._frame[key]
 
     def shadow_samples(self, camera, sigma: float, g: float):
         """The sky's order-1 shadow rays for ``camera`` (:func:`natscene.scatter.sky_first.shadow_samples`) over
@@ -373,7 +386,7 @@ def _trace_halves(scene: Scene, source, sigma: float, g: float, camera, n_photon
                   camera_depth=camera_depth, tally_rate=scene.settings.tally_rate, window=window,
                   split_max=scene.settings.split_max, camera_lobe=scene.settings.camera_lobe,
                   similarity_order=scene.settings.similarity_order, p1_order=scene.settings.p1_order,
-                  jumps=scene.settings.diffusion_jumps)
+                  jumps=scene.settings.diffusion_jumps, seen=scene.frame_voxels(camera))
             for h in range(2)]
 
 
@@ -512,7 +525,7 @@ def view_images(scene: Scene, camera, sigma: float, g: float, seed: int = 0, noi
     if sigma <= 0:
         sky = np.zeros((m, 4, nb_sky, H, W), np.float32) if scene.sky is not None else None
         return ViewImages(np.zeros((m, nb_sun, H, W), np.float32), sky, order_distribution(st.sun_bands, np.zeros(0)),
-                          None if sky is None else order_distribution(st.sky_bands, np.zeros(0)), {})
+                          None if sky is None else order_distribution(st.sky_bands, np.zeros((2, 0))), {})
     from natscene.scatter.inscatter import weighted_voxel_integrals
     depth = scene.camera_depth_voxels(camera)
     vint = weighted_voxel_integrals(scene.med, depth, camera.position, sigma * scene.volume.extinction_scale)
@@ -549,7 +562,7 @@ def view_images(scene: Scene, camera, sigma: float, g: float, seed: int = 0, noi
             stats.update(sky_photons=sky.photons, sky_collisions=sky.collisions,
                          sky_order1="shadow_rays" if order1 is not None else "photons")
         return ViewImages(sun.halves[:, 0], sky_halves,
-                          order_distribution(st.sun_bands, sun.histogram),
+                          order_distribution(st.sun_bands, sun.histogram[0]),
                           None if sky is None else order_distribution(st.sky_bands, sky.histogram), stats)
 
     targeted = noise is not None and max(st.noise_target) > 0

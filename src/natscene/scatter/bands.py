@@ -11,6 +11,8 @@ Defines the grouping of scattering orders into bands, with the closed-form albed
 -   :func:`order_distribution`: each band's distribution of orders (sub-bins: share, mean order) from the order
     histogram.
 -   :func:`band_weights`: the albedo weights c_b(beta) of the bands.
+-   :data:`SKY_GROUPS`, :func:`channel_weights`: the sky's channels (the dome's R, G, B, the ground) and the
+    order distribution each of them takes.
 
 Dobashi 2012 §7 proposes to "cluster high orders of scattering into several sets (e.g. 2, 3-4, 5-6, and so
 on) as proposed by Bouthors et al. [2008]". The all-orders transport stores, per pixel, the light of each
@@ -19,14 +21,17 @@ and composes the multiple scattering of any albedo beta as
 
     Σ_{k>=2} beta^k E^(k)(q) = Σ_b c_b(beta) T_b(q),    c_b(beta) = Σ_{k∈B_b} w_b(k) beta^k,
 
-where w_b is the distribution of orders inside the band, taken from the order histogram of the whole cloud
-(the light of each exact order toward the camera, tallied while tracing). A band's distribution is kept as
-``ORDER_BINS`` sub-bins of orders, log-spaced over the band, each with its share of the band's light and its mean
-order, and c_b(beta) = Σ_j p_bj beta^(k̄_bj). A geometric distribution w_b(k) ∝ r^k fitted to the histogram
-cannot follow the heavy tail of a thick cloud's orders (the reflected light's orders fall as a power of k; the
-measured difference is in docs/stages/precompute.md, "Thick clouds"). The composition stays a linear combination of
-per-pixel images with weights that are closed-form functions of beta, as Dobashi's Eq. 8; what the sub-bins
-cannot hold is the variation of the order distribution from pixel to pixel inside one band.
+where w_b is the distribution of orders inside the band, taken from the order histogram of what the camera sees
+(the light of each exact order toward the camera from the voxels in its frame, tallied while tracing). A band's
+distribution is kept as ``ORDER_BINS`` sub-bins of orders, log-spaced over the band's orders with light, each with
+its share of the band's light and its mean order, and c_b(beta) = Σ_j p_bj beta^(k̄_bj). A geometric distribution
+w_b(k) ∝ r^k fitted to the histogram cannot follow the heavy tail of a thick cloud's orders (the reflected light's
+orders fall as a power of k; the measured difference is in docs/stages/precompute.md, "Thick clouds"). Light
+whose orders differ by source has a histogram of its own: the sky's ground channel (the light from below enters a
+cloud's base after a few orders where the dome's light needs hundreds) keeps its own distribution
+(:data:`SKY_GROUPS`). The composition stays a linear combination of per-pixel images with weights that are
+closed-form functions of beta, as Dobashi's Eq. 8; what the sub-bins cannot hold is the variation of the order
+distribution from pixel to pixel inside one band.
 
 References
 ----------
@@ -40,12 +45,19 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["SUN_BANDS", "SKY_BANDS", "check_bands", "band_table", "ORDER_BINS", "order_distribution", "band_weights"]
+__all__ = ["SUN_BANDS", "SKY_BANDS", "check_bands", "band_table", "ORDER_BINS", "order_distribution", "band_weights",
+           "SKY_GROUPS", "channel_weights"]
 
 SUN_BANDS = ((2, 2), (3, 3), (4, 4), (5, 8), (9, 16), (17, 32), (33, 64), (65, 256), (257, 1024), (1025, 4096),
              (4097, None))
 SKY_BANDS = ((1, 1), (2, 8), (9, None))
-ORDER_BINS = 16                    # sub-bins of orders per band
+ORDER_BINS = 32
+"""Sub-bins of orders per band. A sub-bin composes beta^k at its mean order, below the mean of beta^k over its
+orders (Jensen): 16 sub-bins over the open band of the sky's light transmitted through a slab of optical depth 100
+(g 0.85) composed beta 0.99 at 0.92 of 32 sub-bins' (and 64's: within 1 %)."""
+SKY_GROUPS = (0, 0, 0, 1)
+"""The order histogram of each of the sky's four channels (:class:`natscene.scatter.photons.SkySource`): the dome's
+R, G, B share the first, the ground the second."""
 
 
 def band_table(bands, max_order: int) -> np.ndarray:
@@ -84,12 +96,17 @@ def _sub_bins(a: int, e: int) -> np.ndarray:
 
 def order_distribution(bands, histogram) -> np.ndarray:
     """(B, ORDER_BINS, 2): per band, its sub-bins' share of the band's light and mean order, from the order
-    histogram (light per exact order, index = order; the open band ends at the histogram's last order). A band
-    without light puts all of it at its first order; unused sub-bins have share 0."""
+    histogram (light per exact order, index = order); the open band ends at the histogram's last order with light.
+    A band without light puts all of it at its first order; unused sub-bins have share 0. A histogram (G, orders),
+    one per channel group, gives (G, B, ORDER_BINS, 2)."""
     h = np.asarray(histogram, np.float64)
+    if h.ndim == 2:
+        return np.stack([order_distribution(bands, x) for x in h])
     out = np.zeros((len(bands), ORDER_BINS, 2))
+    lit = np.flatnonzero(h > 0)
+    last = int(lit[-1]) if lit.size else -1
     for i, (a, e) in enumerate(bands):
-        hi = len(h) - 1 if e is None else min(int(e), len(h) - 1)
+        hi = last if e is None else min(int(e), last)
         out[i, :, 1] = a
         if hi < a or h[a:hi + 1].sum() <= 0:
             out[i, 0, 0] = 1.0
@@ -121,3 +138,13 @@ def band_weights(bands, orders, beta) -> np.ndarray:
     with np.errstate(divide="ignore"):
         lb = np.log(beta)[:, None, None]
     return np.einsum("pbj,pbj->pb", d[..., 0], np.exp(np.where(d[..., 0] > 0, lb * d[..., 1], 0.0)))
+
+
+def channel_weights(bands, orders, beta, groups=SKY_GROUPS) -> np.ndarray:
+    """c_b(beta) (P, C, B) of each of C channels, channel c taking the order distributions ``orders[..., groups[c],
+    :, :, :]``: ``orders`` (G, B, J, 2), or (P, G, B, J, 2) one per albedo (:func:`band_weights`)."""
+    d = np.asarray(orders, np.float64)
+    if d.ndim not in (4, 5) or d.shape[-4] <= max(groups):
+        raise ValueError(f"channel_weights: order distributions of shape {d.shape} for the groups {groups}")
+    per = [band_weights(bands, d[..., gi, :, :, :], beta) for gi in range(d.shape[-4])]
+    return np.stack([per[gi] for gi in groups], 1)

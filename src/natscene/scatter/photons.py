@@ -76,7 +76,7 @@ import natscene.variant  # noqa: F401
 import drjit as dr
 import mitsuba as mi
 
-from natscene.scatter.bands import band_table
+from natscene.scatter.bands import SKY_GROUPS, band_table
 from natscene.scatter.majorant import MajorantGrid, flight_event
 from natscene.scatter.medium import ray_box_dr
 from natscene.scatter.phase import hg_dr, hg_p1_dr, hg_sample_cos_dr
@@ -108,6 +108,7 @@ class SunBeam:
     cloud; each carries the same power (lit area / n)."""
 
     channels = 1
+    groups = (0,)         # the order histogram of each channel
 
     def __init__(self, grid: MajorantGrid, bbox_min, bbox_max, sun_dir, texels: int = 128, dilate: int = 2):
         from scipy.ndimage import binary_dilation
@@ -163,6 +164,7 @@ class SkySource:
     point it leaves."""
 
     channels = 4
+    groups = SKY_GROUPS   # the order histogram of each channel: the dome's R, G, B one, the ground its own
 
     def __init__(self, dome, box_min, box_max, p_ground: float = 0.25, ground=None):
         from natscene.scatter.skylight import cell_directions
@@ -271,13 +273,13 @@ class SkySource:
 @dataclass
 class InscatterTally:
     """Cache numerators per cache: ``numerators[i]`` (channels, len(band_sets[i]), cz, cy, cx) in cells of
-    ``factors[i]`` voxels for the bands ``band_sets[i]``; the tallied light per exact order (index = order,
-    all channels and cells)."""
+    ``factors[i]`` voxels for the bands ``band_sets[i]``; the tallied light per exact order (index = order) of the
+    cells in the camera's frame, per group of the source's channels."""
 
     numerators: list
     factors: tuple
     band_sets: tuple
-    histogram: np.ndarray
+    histogram: np.ndarray     # (groups, max_order + 1): per channel group of the source (its ``groups``)
     photons: int
     collisions: int
     truncated: float          # power of the photons still alive at max_order, relative to all tallied light
@@ -349,7 +351,8 @@ class _Walk:
     caches: list          # (factor, dims, cells, offset) per cache: its numerators begin at offset in accs
     slot_tabs: list       # per cache: the band slot of each order (-1: not tallied)
     accs: list            # per channel: UInt64 fixed-point numerators of every cache, one after the other
-    hist: object          # UInt64 [max_order + 1]
+    hist: object          # UInt64 [groups x (max_order + 1)]: the order histogram of each channel group
+    groups: tuple         # the histogram group of each channel
     trunc: object         # UInt64 [1]
     max_order: int
     k_min: int
@@ -360,6 +363,7 @@ class _Walk:
     p1: object = None     # None, or (first order, the numerators' size): P1 tallies (:func:`_walk`)
     jumps: object = None  # None, or (radius per majorant cell, collisions, exit cosines, 1 - g, g, any order):
                           # diffusion jumps (:func:`_jump`)
+    seen: object = None   # None, or Float per voxel: 1 where the camera's frame sees it (the order histogram's)
 
 
 @dr.syntax
@@ -540,8 +544,16 @@ def _walk(s: _Walk, rec_p, rec_w, rec_wts, rec_mult, rec_k, rec_vis, rec_state, 
         power = mi.Float(0.0)
         for c in range(nch):
             power += wts[c]
-        dr.scatter_reduce(dr.ReduceOp.Add, s.hist, _fixed(light * power), dr.minimum(k, s.max_order),
-                          accept & (k >= s.k_min))
+        seen = light
+        if s.seen is not None:      # the histogram counts the light of the voxels in the camera's frame only
+            seen = light * dr.gather(mi.Float, s.seen, _cache_index(p, s.lo, s.ext, s.res, 1, s.res), accept)
+        for gi in range(max(s.groups) + 1):
+            part = mi.Float(0.0)
+            for c in range(nch):
+                if s.groups[c] == gi:
+                    part += wts[c]
+            dr.scatter_reduce(dr.ReduceOp.Add, s.hist, _fixed(seen * part),
+                              gi * (s.max_order + 1) + dr.minimum(k, s.max_order), accept & (k >= s.k_min))
         ends = accept & (k >= s.max_order)
         dr.scatter_reduce(dr.ReduceOp.Add, s.trunc, _fixed(power), 0, ends)
         goes_on = accept & ~ends
@@ -651,7 +663,7 @@ def trace(med, grid: MajorantGrid, source, sigma: float, g: float, camera_positi
           caches=((2, None),), seed: int = 0, max_order: int = 4096, k_min: int = 2, batch: int = 2 ** 18,
           progress=None, camera_depth=None, tally_rate: float = 0.0, phase: bool = True,
           window=None, split_max: int = 8, camera_lobe: float = 0.0, similarity_order: int = 0,
-          p1_order: int = 0, jumps: bool = False) -> InscatterTally:
+          p1_order: int = 0, jumps: bool = False, seen=None) -> InscatterTally:
     """Trace ``n_photons`` from ``source`` through the medium at (sigma, g) and tally the in-scatter caches.
 
     ``caches``: (factor, band indices or None = all bands) per cache; every band goes to exactly one cache.
@@ -669,6 +681,8 @@ def trace(med, grid: MajorantGrid, source, sigma: float, g: float, camera_positi
     ``p1_order`` > 0: from that order on the tallies take the phase function's P1 part (:func:`_walk`).
     ``jumps``: a photon deep inside the cloud, where the camera sees nothing (needs ``camera_depth``) and the
     density is nearly constant, crosses a ball of it in one step (:mod:`.jumps`, :func:`_jump`).
+    ``seen``: bool [nz, ny, nx], the voxels in the camera's frame (:func:`natscene.geometry.frame_voxels`): the
+    order histogram takes the collisions there only (None: everywhere).
 
     The source's photons are walked by :func:`_walk` in one pass per ``batch`` photons; the copies that pass
     splits off are walked in the next, and so on until no copy is left (2^18 photons a batch keep a main-job node
@@ -718,8 +732,8 @@ def trace(med, grid: MajorantGrid, source, sigma: float, g: float, camera_positi
               _vec(med.bbox_max - med.bbox_min), res,
               [(f, dims, ncell, int(offsets[ci])) for ci, (f, dims, ncell) in enumerate(geo)],
               [mi.Int32(x) for x in slot_np], [dr.zeros(mi.UInt64, total) for _ in range(nch)],
-              dr.zeros(mi.UInt64, max_order + 1), dr.zeros(mi.UInt64, 1), int(max_order), int(k_min), bool(phase),
-              window, int(split_max), None)
+              dr.zeros(mi.UInt64, (max(source.groups) + 1) * (max_order + 1)), tuple(source.groups),
+              dr.zeros(mi.UInt64, 1), int(max_order), int(k_min), bool(phase), window, int(split_max), None)
     if p1_order > 0 and phase:
         s.p1 = (dr.opaque(mi.UInt32, int(p1_order)), total)
         s.accs = [dr.zeros(mi.UInt64, 2 * total) for _ in range(nch)]
@@ -728,6 +742,8 @@ def trace(med, grid: MajorantGrid, source, sigma: float, g: float, camera_positi
                         dr.opaque(mi.Float, math.log(float(g))))
     if jumps and vis is not None and (g <= ISOTROPIC_G or s.similarity is not None):
         s.jumps = _jump_tables(med, grid, vis[0], float(sigma) * med.scale, g)
+    if seen is not None:
+        s.seen = mi.Float(np.ascontiguousarray(seen, np.float32).ravel())
     unit = None     # photon power that one fixed-point unit of FIXED stands for (the first batch's mean)
     collisions = 0
     done = 0
@@ -771,7 +787,7 @@ def trace(med, grid: MajorantGrid, source, sigma: float, g: float, camera_positi
     nums = [np.stack([(a[offsets[ci]:offsets[ci] + geo[ci][2] * len(band_sets[ci])] * scale)
                       .reshape(len(band_sets[ci]), geo[ci][1][2], geo[ci][1][1], geo[ci][1][0]) for a in accs])
             for ci in range(len(caches))]
-    h = np.asarray(s.hist, np.float64) * scale
+    h = np.asarray(s.hist, np.float64).reshape(max(source.groups) + 1, max_order + 1) * scale
     tot_light = h.sum()
     trunc = float(np.asarray(s.trunc, np.float64)[0]) * scale
     return InscatterTally(nums, tuple(x[0] for x in geo), tuple(band_sets), h, int(done), int(collisions),

@@ -27,8 +27,9 @@ and the multiple scattering of the chosen transport:
 - ``transport: all_orders`` (the default, :mod:`natscene.scatter.allorders`): ``sun_ms`` (B, Ng, Ns, H, W),
   every order >= 2 of the sun's light grouped into bands of orders, and ``sky_ms`` (4, B', Ng, Ns, H, W),
   every order >= 1 of the skylight for the dome's R, G, B distributions and a unit-radiance ground, both
-  without the albedo, with the bands' order distributions (``sun_orders``, ``sky_orders``: (Ng, Ns, B, J, 2)) that
-  make beta compose in closed form (:mod:`natscene.scatter.bands`);
+  without the albedo, with the bands' order distributions (``sun_orders`` (Ng, Ns, B, J, 2), ``sky_orders``
+  (Ng, Ns, 2, B', J, 2): the dome's and the ground's) that make beta compose in closed form
+  (:mod:`natscene.scatter.bands`);
 - ``transport: dobashi`` (the paper): ``multiple`` (K, Ng, Ns, H, W), E_m^(k)(q, g, e) of Eq. 7 for k in
   ``orders`` = 2..n_m (:mod:`natscene.scatter.multiple`), plus the ambient term through ``s_amb``.
 
@@ -88,7 +89,7 @@ class Tables:
     sun_ms: np.ndarray | None = None       # (B, Ng, Ns, H, W)
     sky_ms: np.ndarray | None = None       # (4, B', Ng, Ns, H, W)
     sun_orders: np.ndarray | None = None   # (Ng, Ns, B, J, 2)
-    sky_orders: np.ndarray | None = None   # (Ng, Ns, B', J, 2)
+    sky_orders: np.ndarray | None = None   # (Ng, Ns, 2, B', J, 2): the dome's R, G, B, the ground (SKY_GROUPS)
 
     @property
     def shape(self) -> tuple[int, int]:

@@ -45,7 +45,7 @@ import numpy as np
 
 from natscene.errors import InputError
 from natscene.io import read_exr, write_exr
-from natscene.scatter.bands import ORDER_BINS, band_weights, order_distribution
+from natscene.scatter.bands import ORDER_BINS, SKY_GROUPS, band_weights, channel_weights, order_distribution
 from natscene.scatter.nodes import brackets
 from natscene.scatter.params import rgb_per_individual
 from natscene.scatter.phase import INV_4PI, hg
@@ -118,10 +118,10 @@ def composed_halves(vi, sun_bands, sky_bands, sky_w, beta: float) -> dict:
     ``sun`` (orders >= 2), ``sky`` (R + G + B, orders >= 1) and ``sun_and_sky`` (luminance, weights ``sky_w`` of
     the dome's R, G, B and the ground, :func:`sky_luminance_weights`)."""
     cs = band_weights(sun_bands, vi.sun_orders, beta)[0]
-    ck = band_weights(sky_bands, vi.sky_orders, beta)[0]
+    ck = channel_weights(sky_bands, vi.sky_orders, beta)[0]                          # (4 channels, B)
     sun = [np.tensordot(cs, vi.sun_halves[h], 1) for h in range(2)]
-    sky = [np.tensordot(ck, vi.sky_halves[h][:3].sum(0), 1) for h in range(2)]
-    both = [sun[h] + np.tensordot(ck, np.tensordot(sky_w, vi.sky_halves[h], 1), 1) for h in range(2)]
+    sky = [np.tensordot(ck[:3], vi.sky_halves[h][:3], 2) for h in range(2)]
+    both = [sun[h] + np.tensordot(ck * np.asarray(sky_w)[:, None], vi.sky_halves[h], 2) for h in range(2)]
     return {"sun": sun, "sky": sky, "sun_and_sky": both}
 
 
@@ -199,7 +199,8 @@ def _multiple(volume, camera, sun_dir, sigmas, gs, settings, sky, seed, log, sin
     sun_ms = np.zeros((len(sb), Ng, Ns, H, W), np.float32)
     sky_ms = np.zeros((4, len(kb), Ng, Ns, H, W), np.float32)
     sun_r = np.broadcast_to(order_distribution(sb, np.zeros(0)), (Ng, Ns, len(sb), ORDER_BINS, 2)).copy()
-    sky_r = np.broadcast_to(order_distribution(kb, np.zeros(0)), (Ng, Ns, len(kb), ORDER_BINS, 2)).copy()
+    sky_r = np.broadcast_to(order_distribution(kb, np.zeros((max(SKY_GROUPS) + 1, 0))),
+                            (Ng, Ns, max(SKY_GROUPS) + 1, len(kb), ORDER_BINS, 2)).copy()
     noise = {f"{part}.beta{b:g}": [] for part in ("sun", "sky", "sun_and_sky", "pixel") for b in NOISE_BETAS}
     # the composed multiple scattering as the sun (irradiance 1) and the dome light the cloud, in luminance:
     # the dome's R, G, B and the ground (albedo 0.2 under the sun and the dome), and the pixel's single scattering
@@ -321,10 +322,10 @@ def _kernel():
                                     row = sun_ms[gi, si, b]
                                     for n in range(m):
                                         acc[n] += w * row[n0 + n]
-                            for b in range(Bk):
-                                w = wsky[j, u, v, b]
-                                if w != 0:
-                                    for c in range(4):
+                            for c in range(4):
+                                for b in range(Bk):
+                                    w = wsky[j, u, v, c, b]
+                                    if w != 0:
                                         rc = sky_ms[gi, si, c, b]
                                         for n in range(m):
                                             acc_k[c, n] += w * rc[n0 + n]
@@ -344,9 +345,10 @@ def _kernel():
 def weights(tables, p: dict, P: int):
     """Per individual: the (e, g) brackets and the band weights of the all-orders composition.
 
-    Returns sidx, gidx (P, 2), ws (P, 2), wsun (P, 2, 2, B) = w_g w_s L_in c_b(beta), wsky (P, 2, 2, B')
-    = w_g w_s c'_b(beta), a (P, 3) the dome's calibration, G (P, 3) the ground radiance (of ``p``'s
-    ``ground_albedo``, which the composition needs: the fit gives it, :meth:`AllOrders.fit_fixed`)."""
+    Returns sidx, gidx (P, 2), ws (P, 2), wsun (P, 2, 2, B) = w_g w_s L_in c_b(beta), wsky (P, 2, 2, 4, B')
+    = w_g w_s c'_cb(beta) for each of the sky's channels (:func:`natscene.scatter.bands.channel_weights`), a (P, 3)
+    the dome's calibration, G (P, 3) the ground radiance (of ``p``'s ``ground_albedo``, which the composition
+    needs: the fit gives it, :meth:`AllOrders.fit_fixed`)."""
     sig = np.asarray(tables.extinction, np.float64)
     gs = np.asarray(tables.g, np.float64)
     sb, kb = tables.sun_bands, tables.sky_bands
@@ -356,14 +358,14 @@ def weights(tables, p: dict, P: int):
     gidx = np.stack([gi, np.minimum(gi + 1, gs.size - 1)], 1)
     ws = np.stack([1.0 - fs, fs], 1).astype(np.float32)
     wsun = np.zeros((P, 2, 2, len(sb)), np.float32)
-    wsky = np.zeros((P, 2, 2, len(kb)), np.float32)
+    wsky = np.zeros((P, 2, 2, 4, len(kb)), np.float32)          # per sky channel: its own order distribution
     sun_r, sky_r = np.asarray(tables.sun_orders), np.asarray(tables.sky_orders)
     for u, wg in enumerate((1.0 - fg, fg)):
         for v, wsv in enumerate((1.0 - fs, fs)):
             w = wg * wsv                                               # (P,)
             g_n, s_n = gidx[:, u], sidx[:, v]
             wsun[:, u, v] = (w * p["L_in"])[:, None] * band_weights(sb, sun_r[g_n, s_n], p["beta"])
-            wsky[:, u, v] = w[:, None] * band_weights(kb, sky_r[g_n, s_n], p["beta"])
+            wsky[:, u, v] = w[:, None, None] * channel_weights(kb, sky_r[g_n, s_n], p["beta"])
     sl = tables.meta.get("skylight", {})
     a = rgb_per_individual(p, "sky_scale", P, 1.0)
     if "ground_albedo" not in p:
@@ -401,7 +403,7 @@ def _compose(tables, p: dict, P: int, arrays, cos_t, sky, N: int, backend: str) 
                 if wsun[j, u, v].any():
                     acc += wsun[j, u, v] @ sun_ms[gi, si]
                 if wsky[j, u, v].any():
-                    k = np.tensordot(wsky[j, u, v], sky_ms[gi, si], axes=(0, 1))    # (4, N)
+                    k = np.einsum("cb,cbn->cn", wsky[j, u, v], sky_ms[gi, si])      # (4, N)
                     acc_c += a[j][:, None] * k[:3] + G[j][:, None] * k[3][None]
         t = ws[j, 0] * s_T[sidx[j, 0]] + ws[j, 1] * s_T[sidx[j, 1]]
         out[j] = (acc[:, None] * c_in[j][None] + acc_c.T + t[:, None] * sky).astype(np.float32)
@@ -456,8 +458,8 @@ class AllOrders(Transport):
         for gi in gis:
             w = band_weights(tables.sun_bands, tables.sun_orders[gi, si], 0.99)[0]
             sun.append(("sun all orders", np.tensordot(w, tables.sun_ms[:, gi, si], 1)))
-            w = band_weights(tables.sky_bands, tables.sky_orders[gi, si], 0.99)[0]
-            sky.append(("sky all orders", np.moveaxis(np.tensordot(w, tables.sky_ms[:3, :, gi, si], (0, 1)), 0, -1)))
+            w = channel_weights(tables.sky_bands, tables.sky_orders[gi, si], 0.99)[0, :3]       # (3, B)
+            sky.append(("sky all orders", np.einsum("cb,cbhw->hwc", w, tables.sky_ms[:3, :, gi, si])))
         return [sun, sky]
 
     def values_per_node(self, section: dict) -> int:
@@ -503,6 +505,11 @@ class AllOrders(Transport):
         if scale.size != len(names) or "sun_orders" not in ao.attrs or "sky_orders" not in ao.attrs:
             raise InputError(f"{path}: channel scales or the bands' order distributions missing; rerun the "
                              "precompute rule")
+        sky_r = np.asarray(ao.attrs["sky_orders"], np.float64)
+        if sky_r.ndim != 6 or sky_r.shape[2] != max(SKY_GROUPS) + 1:
+            raise InputError(f"{path}: the sky's order distributions have shape {sky_r.shape}, not one per group of "
+                             f"its channels (Ng, Ns, {max(SKY_GROUPS) + 1}, bands, bins, 2): written by an older "
+                             "natscene; rerun the precompute rule")
         stack = np.moveaxis(ao.channel(*names).reshape(H, W, -1), -1, 0)
         data = stack.astype(np.float32) * scale[:, None, None].astype(np.float32)
         n_sun = len(sb) * len(gs) * len(extinctions)
@@ -510,7 +517,7 @@ class AllOrders(Transport):
                 "sun_ms": np.ascontiguousarray(data[:n_sun].reshape(len(sb), len(gs), len(extinctions), H, W)),
                 "sky_ms": np.ascontiguousarray(data[n_sun:].reshape(4, len(kb), len(gs), len(extinctions), H, W)),
                 "sun_orders": np.asarray(ao.attrs["sun_orders"], np.float64),
-                "sky_orders": np.asarray(ao.attrs["sky_orders"], np.float64)}
+                "sky_orders": sky_r}
 
     def compose(self, tables, p: dict, P: int, arrays: Arrays, sky: np.ndarray, backend: str) -> np.ndarray:
         return _compose(tables, p, P, (arrays.s_sun, arrays.T, arrays.sun_ms, arrays.sky_ms), arrays.cos_t,
@@ -544,8 +551,8 @@ class AllOrders(Transport):
         a_m = L_in * np.tensordot(band_weights(st.sun_bands, vi.sun_orders, beta)[0], vi.sun, 1)
         L_sky_lit = np.zeros((H, W, 3), np.float32)
         if dome is not None:
-            ck = band_weights(st.sky_bands, vi.sky_orders, beta)[0]
-            sky_bands = np.tensordot(ck, np.moveaxis(vi.sky, 1, 0), 1)          # (4, H, W)
+            ck = channel_weights(st.sky_bands, vi.sky_orders, beta)[0]          # (4, B)
+            sky_bands = np.einsum("cb,cbhw->chw", ck, vi.sky)                   # (4, H, W)
             sin_el = max(float(med.sun_dir[1]), 0.0)
             G_sun = ground_radiance(albedo, L_in * c_in * sin_el, 0.0)
             L_sky_lit = (np.moveaxis(sky_bands[:3], 0, -1)
