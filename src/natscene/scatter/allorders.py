@@ -65,7 +65,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from natscene.scatter.bands import SKY_BANDS, SUN_BANDS, order_distribution
+from natscene.scatter.bands import SKY_BANDS, SKY_HISTOGRAMS, SUN_BANDS, order_distribution
 
 __all__ = ["AllOrdersSettings", "settings_from_config", "render_settings", "frame_settings", "Lighting", "Scene",
            "ViewImages", "view_images", "weight_window", "photons_for", "standard_error",
@@ -524,8 +524,9 @@ def view_images(scene: Scene, camera, sigma: float, g: float, seed: int = 0, noi
     m = 2 if halves else 1
     if sigma <= 0:
         sky = np.zeros((m, 4, nb_sky, H, W), np.float32) if scene.sky is not None else None
+        sky_orders = None if sky is None else order_distribution(st.sky_bands, np.zeros((SKY_HISTOGRAMS, 0)))
         return ViewImages(np.zeros((m, nb_sun, H, W), np.float32), sky, order_distribution(st.sun_bands, np.zeros(0)),
-                          None if sky is None else order_distribution(st.sky_bands, np.zeros((2, 0))), {})
+                          sky_orders, {})
     from natscene.scatter.inscatter import weighted_voxel_integrals
     depth = scene.camera_depth_voxels(camera)
     vint = weighted_voxel_integrals(scene.med, depth, camera.position, sigma * scene.volume.extinction_scale)

@@ -46,7 +46,7 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["SUN_BANDS", "SKY_BANDS", "check_bands", "band_table", "ORDER_BINS", "order_distribution", "band_weights",
-           "SKY_GROUPS", "channel_weights"]
+           "SKY_GROUPS", "SKY_HISTOGRAMS", "channel_weights"]
 
 SUN_BANDS = ((2, 2), (3, 3), (4, 4), (5, 8), (9, 16), (17, 32), (33, 64), (65, 256), (257, 1024), (1025, 4096),
              (4097, None))
@@ -58,6 +58,8 @@ orders (Jensen): the sky's light transmitted through a slab of optical depth 100
 SKY_GROUPS = (0, 0, 0, 1)
 """The order histogram of each of the sky's four channels (:class:`natscene.scatter.photons.SkySource`): the dome's
 R, G, B share the first, the ground the second."""
+SKY_HISTOGRAMS = max(SKY_GROUPS) + 1
+"""The sky's order histograms (and order distributions per node): the dome's and the ground's."""
 
 
 def band_table(bands, max_order: int) -> np.ndarray:

@@ -716,6 +716,7 @@ def trace(med, grid: MajorantGrid, source, sigma: float, g: float, camera_positi
         slot[:k_min] = -1
         slot_np.append(slot)
     nch = source.channels
+    n_hist = max(source.groups) + 1        # order histograms: one per group of the source's channels
     sizes = [max(1, geo[ci][2] * len(band_sets[ci])) for ci in range(len(caches))]
     offsets = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
     total = int(offsets[-1])
@@ -732,7 +733,7 @@ def trace(med, grid: MajorantGrid, source, sigma: float, g: float, camera_positi
               _vec(med.bbox_max - med.bbox_min), res,
               [(f, dims, ncell, int(offsets[ci])) for ci, (f, dims, ncell) in enumerate(geo)],
               [mi.Int32(x) for x in slot_np], [dr.zeros(mi.UInt64, total) for _ in range(nch)],
-              dr.zeros(mi.UInt64, (max(source.groups) + 1) * (max_order + 1)), tuple(source.groups),
+              dr.zeros(mi.UInt64, n_hist * (max_order + 1)), tuple(source.groups),
               dr.zeros(mi.UInt64, 1), int(max_order), int(k_min), bool(phase), window, int(split_max), None)
     if p1_order > 0 and phase:
         s.p1 = (dr.opaque(mi.UInt32, int(p1_order)), total)
@@ -787,7 +788,7 @@ def trace(med, grid: MajorantGrid, source, sigma: float, g: float, camera_positi
     nums = [np.stack([(a[offsets[ci]:offsets[ci] + geo[ci][2] * len(band_sets[ci])] * scale)
                       .reshape(len(band_sets[ci]), geo[ci][1][2], geo[ci][1][1], geo[ci][1][0]) for a in accs])
             for ci in range(len(caches))]
-    h = np.asarray(s.hist, np.float64).reshape(max(source.groups) + 1, max_order + 1) * scale
+    h = np.asarray(s.hist, np.float64).reshape(n_hist, max_order + 1) * scale
     tot_light = h.sum()
     trunc = float(np.asarray(s.trunc, np.float64)[0]) * scale
     return InscatterTally(nums, tuple(x[0] for x in geo), tuple(band_sets), h, int(done), int(collisions),

@@ -45,7 +45,7 @@ import numpy as np
 
 from natscene.errors import InputError
 from natscene.io import read_exr, write_exr
-from natscene.scatter.bands import ORDER_BINS, SKY_GROUPS, band_weights, channel_weights, order_distribution
+from natscene.scatter.bands import ORDER_BINS, SKY_HISTOGRAMS, band_weights, channel_weights, order_distribution
 from natscene.scatter.nodes import brackets
 from natscene.scatter.params import rgb_per_individual
 from natscene.scatter.phase import INV_4PI, hg
@@ -199,8 +199,8 @@ def _multiple(volume, camera, sun_dir, sigmas, gs, settings, sky, seed, log, sin
     sun_ms = np.zeros((len(sb), Ng, Ns, H, W), np.float32)
     sky_ms = np.zeros((4, len(kb), Ng, Ns, H, W), np.float32)
     sun_r = np.broadcast_to(order_distribution(sb, np.zeros(0)), (Ng, Ns, len(sb), ORDER_BINS, 2)).copy()
-    sky_r = np.broadcast_to(order_distribution(kb, np.zeros((max(SKY_GROUPS) + 1, 0))),
-                            (Ng, Ns, max(SKY_GROUPS) + 1, len(kb), ORDER_BINS, 2)).copy()
+    sky_r = np.broadcast_to(order_distribution(kb, np.zeros((SKY_HISTOGRAMS, 0))),
+                            (Ng, Ns, SKY_HISTOGRAMS, len(kb), ORDER_BINS, 2)).copy()
     noise = {f"{part}.beta{b:g}": [] for part in ("sun", "sky", "sun_and_sky", "pixel") for b in NOISE_BETAS}
     # the composed multiple scattering as the sun (irradiance 1) and the dome light the cloud, in luminance:
     # the dome's R, G, B and the ground (albedo 0.2 under the sun and the dome), and the pixel's single scattering
@@ -506,9 +506,9 @@ class AllOrders(Transport):
             raise InputError(f"{path}: channel scales or the bands' order distributions missing; rerun the "
                              "precompute rule")
         sky_r = np.asarray(ao.attrs["sky_orders"], np.float64)
-        if sky_r.ndim != 6 or sky_r.shape[2] != max(SKY_GROUPS) + 1:
+        if sky_r.ndim != 6 or sky_r.shape[2] != SKY_HISTOGRAMS:
             raise InputError(f"{path}: the sky's order distributions have shape {sky_r.shape}, not one per group of "
-                             f"its channels (Ng, Ns, {max(SKY_GROUPS) + 1}, bands, bins, 2): written by an older "
+                             f"its channels (Ng, Ns, {SKY_HISTOGRAMS}, bands, bins, 2): written by an older "
                              "natscene; rerun the precompute rule")
         stack = np.moveaxis(ao.channel(*names).reshape(H, W, -1), -1, 0)
         data = stack.astype(np.float32) * scale[:, None, None].astype(np.float32)
