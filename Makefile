@@ -28,8 +28,11 @@ smoke: setup
 	$(VENV)/bin/python -m natscene.recover --directory results/smoke
 	$(VENV)/bin/snakemake --cores $(CORES) --configfile config/smoke.yaml --directory results/smoke --rerun-incomplete
 
-test: setup  # without the SLURM tests (minutes each; docs/cluster.md): `pytest -m cluster` runs them
-	$(VENV)/bin/python -m pytest -q -m "not cluster"
+# the tests on TEST_WORKERS processes (pytest-xdist; tests/conftest.py says who shares what), without the SLURM
+# tests (minutes each; docs/cluster.md): `pytest -m cluster` runs them
+TEST_WORKERS ?= 2
+test: setup
+	$(VENV)/bin/python -m pytest -q -m "not cluster" -n $(TEST_WORKERS)
 
 bench: setup
 	@for b in benchmarks/*.py; do echo "== $$b"; $(VENV)/bin/python $$b || exit 1; done

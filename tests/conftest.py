@@ -1,5 +1,5 @@
-"""Shared test set-up: the library on the path (also without an editable install), a pinned Dr.Jit thread
-count and a per-session kernel cache."""
+"""Shared test set-up: the library on the path (also without an editable install), the session's smoke run, and
+how ``pytest -n`` (pytest-xdist: ``make test``) shares the tests among its workers."""
 import os
 import sys
 from pathlib import Path
@@ -18,3 +18,37 @@ def smoke_run(tmp_path_factory):
     workflow and rerun tests; a test that edits the copy or the run restores them."""
     from smoke import start
     return start(tmp_path_factory.mktemp("smoke"))
+
+
+#: tests that one worker runs, in order, as a whole (pytest-xdist's scopes): by module (its module fixtures made
+#: once), the modules of the smoke run together (``smoke_run``, made once); the modules in :data:`SPREAD` share
+#: nothing and spread over the workers case by case
+SMOKE_RUN = ("test_reruns", "test_workflow")
+SPREAD = ("test_slab",)
+#: the longest scopes (minutes each on 2 cores), started first so that the short ones fill the workers' ends
+LONGEST = ("smoke_run", "test_transport", "test_thick", "test_bad_inputs", "test_frames")
+
+
+def scope(nodeid: str) -> str:
+    """The scope a test belongs to (above)."""
+    module = nodeid.split("::", 1)[0].rsplit("/", 1)[-1].removesuffix(".py")
+    return "smoke_run" if module in SMOKE_RUN else nodeid if module in SPREAD else module
+
+
+def pytest_collection_modifyitems(config, items):
+    """The longest scopes first (within a scope the order is kept)."""
+    rank = {g: i for i, g in enumerate(LONGEST)}
+    items.sort(key=lambda item: rank.get(scope(item.nodeid), len(LONGEST)))
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_xdist_make_scheduler(config, log):
+    """``pytest -n`` sends each worker whole scopes (:func:`scope`; pytest-xdist's own ``xdist_group`` marks are
+    not read under pytest 9.2, which keeps a test's id elsewhere than xdist writes the group)."""
+    from xdist.scheduler import LoadScopeScheduling
+
+    class ByScope(LoadScopeScheduling):
+        def _split_scope(self, nodeid):
+            return scope(nodeid)
+
+    return ByScope(config, log)
