@@ -29,16 +29,25 @@ SPREAD = ("test_slab",)
 LONGEST = ("smoke_run", "test_transport", "test_thick", "test_bad_inputs", "test_frames")
 
 
+def _module(nodeid: str) -> str:
+    return nodeid.split("::", 1)[0].rsplit("/", 1)[-1].removesuffix(".py")
+
+
 def scope(nodeid: str) -> str:
     """The scope a test belongs to (above)."""
-    module = nodeid.split("::", 1)[0].rsplit("/", 1)[-1].removesuffix(".py")
+    module = _module(nodeid)
     return "smoke_run" if module in SMOKE_RUN else nodeid if module in SPREAD else module
 
 
 def pytest_collection_modifyitems(config, items):
-    """The longest scopes first (within a scope the order is kept)."""
+    """The longest scopes first (:data:`LONGEST`), then the cases of :data:`SPREAD` by their thickness ``tau``,
+    thickest first (minutes each at 300, seconds at 1), then the rest in their order."""
     rank = {g: i for i, g in enumerate(LONGEST)}
-    items.sort(key=lambda item: rank.get(scope(item.nodeid), len(LONGEST)))
+
+    def key(item):
+        tau = getattr(item, "callspec", None) and item.callspec.params.get("tau", 0.0)
+        return rank.get(scope(item.nodeid), len(LONGEST)), -float(tau or 0.0) if _module(item.nodeid) in SPREAD else 0.0
+    items.sort(key=key)
 
 
 @pytest.hookimpl(optionalhook=True)
@@ -46,6 +55,7 @@ def pytest_xdist_make_scheduler(config, log):
     """``pytest -n`` sends each worker whole scopes (:func:`scope`; pytest-xdist's own ``xdist_group`` marks are
     not read under pytest 9.2, which keeps a test's id elsewhere than xdist writes the group)."""
     from xdist.scheduler import LoadScopeScheduling
+    config.option.loadscopereorder = False      # the order above, not xdist's (the scopes with most tests first)
 
     class ByScope(LoadScopeScheduling):
         def _split_scope(self, nodeid):
