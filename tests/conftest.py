@@ -1,6 +1,5 @@
 """Shared test set-up: the library on the path (also without an editable install), the session's smoke run, and
 how ``pytest -n`` (pytest-xdist: ``make test``) shares the tests among its workers."""
-import os
 import sys
 from pathlib import Path
 
@@ -45,8 +44,8 @@ def pytest_collection_modifyitems(config, items):
     rank = {g: i for i, g in enumerate(LONGEST)}
 
     def key(item):
-        tau = getattr(item, "callspec", None) and item.callspec.params.get("tau", 0.0)
-        return rank.get(scope(item.nodeid), len(LONGEST)), -float(tau or 0.0) if _module(item.nodeid) in SPREAD else 0.0
+        spread = _module(item.nodeid) in SPREAD and hasattr(item, "callspec")
+        return rank.get(scope(item.nodeid), len(LONGEST)), -float(item.callspec.params.get("tau", 0.0)) if spread else 0.0
     items.sort(key=key)
 
 
