@@ -232,7 +232,7 @@ def _check_precompute(p, config):
 
 def _check_fit_extinction(p, config):
     """fit.ranges.extinction in the physical range and covered by precompute.extinction (the fit's tables)."""
-    from natscene.fit.keyframe import extinction_range_problem
+    from natscene.fit.settings import extinction_range_problem
     why = extinction_range_problem(config["fit"]["ranges"]["extinction"], config["precompute"]["extinction"])
     if why:
         p.add("fit.ranges.extinction", why)

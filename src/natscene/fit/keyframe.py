@@ -6,8 +6,6 @@ Defines the fit of Dobashi et al. (2012, Fig. 2): photo products + tables -> ran
 
 -   :func:`fit_keyframe`: fit one keyframe with the GA or the §5.1 gradient baseline.
 -   :func:`effective_ranges`: the configured search ranges, checked against the tables.
--   :func:`extinction_range_problem`, :func:`check_extinction_range`: ``fit.ranges.extinction`` against the
-    precomputed extinction grid.
 -   :func:`optical_depths`: the optical depth through the cloud at an extinction.
 
 Reads nothing and writes nothing: the ``fit`` rule's script loads the inputs and writes what
@@ -31,11 +29,11 @@ from natscene.fit.gradient import gradient_descent
 from natscene.fit.kappa import kappa_grid
 from natscene.fit.objective import Levels
 from natscene.fit.problem import FitProblem
-from natscene.fit.settings import FitSettings, fit_settings
+from natscene.fit.settings import FitSettings, check_extinction_range, fit_settings
 from natscene.errors import InputError
 from natscene.scatter.transport import get as get_transport
 
-__all__ = ["effective_ranges", "extinction_range_problem", "check_extinction_range", "optical_depths",
+__all__ = ["effective_ranges", "optical_depths",
            "fit_keyframe"]
 
 
@@ -60,30 +58,6 @@ def effective_ranges(settings: dict | FitSettings, tables, log=None) -> dict:
             log(f"fit.ranges.g [{lo:g}, {hi:g}] clipped to the precomputed grid [{new[0]:g}, {new[1]:g}]")
         ranges["g"] = new
     return ranges
-
-
-def extinction_range_problem(fit_range, grid) -> str | None:
-    """What is wrong with ``fit.ranges.extinction`` (1/m, searched on a log scale), or None: it must lie inside the
-    physical range (:data:`natscene.scatter.tables.EXTINCTION_RANGE`) and inside the precompute's extinction
-    grid."""
-    from natscene.scatter.tables import EXTINCTION_RANGE
-    lo, hi = (float(x) for x in fit_range)
-    plo, phi = EXTINCTION_RANGE
-    if not plo <= lo <= hi <= phi:
-        return (f"[{lo:g}, {hi:g}] /m must lie in the physical range [{plo:g}, {phi:g}] /m (haze ~0.002, cumulus "
-                f"0.02-0.15, a storm core ~0.3) with min <= max")
-    glo, ghi = float(np.min(grid)), float(np.max(grid))
-    if lo < glo or hi > ghi:
-        return (f"[{lo:g}, {hi:g}] /m is not covered by the precompute's nodes (config key 'precompute.extinction': "
-                f"[{glo:g}, {ghi:g}] /m); add nodes or narrow the range")
-    return None
-
-
-def check_extinction_range(fit_range, grid) -> None:
-    """:func:`extinction_range_problem` as an InputError naming ``fit.ranges.extinction``."""
-    why = extinction_range_problem(fit_range, grid)
-    if why:
-        raise InputError(f"config key 'fit.ranges.extinction': {why}")
 
 
 def optical_depths(extinction: float, columns: dict | None) -> dict:

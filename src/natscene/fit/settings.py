@@ -8,6 +8,8 @@ pair), read from a validated section by :func:`natscene.config.settings_from_sec
 
 -   :func:`fit_settings`: the section as a :class:`FitSettings`.
 -   :class:`FitSettings`, :class:`KappaGridSettings`, :class:`GradientSettings`: the section and its objects.
+-   :func:`extinction_range_problem`, :func:`check_extinction_range`: ``fit.ranges.extinction`` against the
+    physical range and the precomputed extinction grid (also checked before any job: light to import).
 
 References
 ----------
@@ -20,8 +22,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from natscene.config import settings_from_section
+from natscene.errors import InputError
 
-__all__ = ["KappaGridSettings", "GradientSettings", "FitSettings", "fit_settings"]
+__all__ = ["KappaGridSettings", "GradientSettings", "FitSettings", "fit_settings", "extinction_range_problem",
+           "check_extinction_range"]
 
 
 @dataclass(frozen=True)
@@ -86,3 +90,27 @@ def fit_settings(section: dict | None) -> FitSettings:
     kappa = settings_from_section(KappaGridSettings, s.pop("kappa", None), "fit.kappa")
     gradient = settings_from_section(GradientSettings, s.pop("gradient", None), "fit.gradient")
     return settings_from_section(FitSettings, {**s, "kappa": kappa, "gradient": gradient}, "fit")
+
+
+def extinction_range_problem(fit_range, grid) -> str | None:
+    """What is wrong with ``fit.ranges.extinction`` (1/m, searched on a log scale), or None: it must lie inside the
+    physical range (:data:`natscene.scatter.tables.EXTINCTION_RANGE`) and inside the precompute's extinction
+    grid."""
+    from natscene.scatter.tables import EXTINCTION_RANGE
+    lo, hi = (float(x) for x in fit_range)
+    plo, phi = EXTINCTION_RANGE
+    if not plo <= lo <= hi <= phi:
+        return (f"[{lo:g}, {hi:g}] /m must lie in the physical range [{plo:g}, {phi:g}] /m (haze ~0.002, cumulus "
+                f"0.02-0.15, a storm core ~0.3) with min <= max")
+    glo, ghi = float(min(grid)), float(max(grid))
+    if lo < glo or hi > ghi:
+        return (f"[{lo:g}, {hi:g}] /m is not covered by the precompute's nodes (config key 'precompute.extinction': "
+                f"[{glo:g}, {ghi:g}] /m); add nodes or narrow the range")
+    return None
+
+
+def check_extinction_range(fit_range, grid) -> None:
+    """:func:`extinction_range_problem` as an InputError naming ``fit.ranges.extinction``."""
+    why = extinction_range_problem(fit_range, grid)
+    if why:
+        raise InputError(f"config key 'fit.ranges.extinction': {why}")
