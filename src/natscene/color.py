@@ -24,7 +24,6 @@ References
 """
 from __future__ import annotations
 
-import colour
 import numpy as np
 
 __all__ = ["srgb_to_linear", "linear_to_srgb", "luminance", "LUMA_709", "linear_srgb_to_xyz", "xyz_to_linear_srgb",
@@ -36,11 +35,13 @@ LUMA_709 = np.array([0.2126, 0.7152, 0.0722], dtype=np.float32)
 
 def srgb_to_linear(encoded: np.ndarray) -> np.ndarray:
     """Decode sRGB-encoded values in [0, 1] to linear (IEC 61966-2-1 EOTF), float32."""
+    import colour
     return np.asarray(colour.cctf_decoding(np.asarray(encoded, np.float64), function="sRGB"), np.float32)
 
 
 def linear_to_srgb(linear: np.ndarray) -> np.ndarray:
     """Encode linear values to sRGB (inverse EOTF); values are clipped to [0, 1] first."""
+    import colour
     x = np.clip(np.asarray(linear, np.float64), 0.0, 1.0)
     return np.asarray(colour.cctf_encoding(x, function="sRGB"), np.float32)
 
@@ -52,18 +53,21 @@ def luminance(rgb: np.ndarray) -> np.ndarray:
 
 def linear_srgb_to_xyz(rgb: np.ndarray) -> np.ndarray:
     """Linear sRGB -> CIE XYZ (D65)."""
+    import colour
     return np.asarray(colour.RGB_to_XYZ(np.asarray(rgb, np.float64), colour.RGB_COLOURSPACES["sRGB"],
                                         apply_cctf_decoding=False), np.float32)
 
 
 def xyz_to_linear_srgb(xyz: np.ndarray) -> np.ndarray:
     """CIE XYZ (D65) -> linear sRGB."""
+    import colour
     return np.asarray(colour.XYZ_to_RGB(np.asarray(xyz, np.float64), colour.RGB_COLOURSPACES["sRGB"],
                                         apply_cctf_encoding=False), np.float32)
 
 
 def linear_srgb_to_lab(rgb: np.ndarray) -> np.ndarray:
     """Linear sRGB -> CIE L*a*b* (D65 white)."""
+    import colour
     xyz = linear_srgb_to_xyz(rgb)
     white = colour.CCS_ILLUMINANTS["CIE 1931 2 Degree Standard Observer"]["D65"]
     return np.asarray(colour.XYZ_to_Lab(xyz, white), np.float32)
@@ -94,6 +98,7 @@ def cct_duv(rgb) -> tuple[float, float]:
     Daylight and direct sunlight sit close to the locus (|Duv| < 0.01): about 5000-7000 K at midday,
     2000-3500 K near sunset (CIE 15:2004; Wyszecki & Stiles 1982).
     """
+    import colour
     import warnings
 
     xyz = linear_srgb_to_xyz(np.asarray(rgb, np.float32).reshape(3)).astype(np.float64)
