@@ -5,7 +5,7 @@
 # product), the petal pattern maps (patterns/<pattern>/color.exr) and the season leaves (leaves products).
 # `composite` writes the hybrid image, the final image and its PNG; `composite_reference` (entries with
 # reference: true) the full-spectral render of the same rays, a comparison strip and the timings.
-from natscene.composite.inputs import input_files as _composite_input_files
+from natscene.composite.files import input_files as _composite_input_files
 
 
 def _composite_shot(wc):

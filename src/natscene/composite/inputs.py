@@ -5,8 +5,6 @@ Inputs of the set
 Defines how a validated ``composite.<name>`` config entry becomes a :class:`natscene.composite.set_spec.SetSpec`:
 
 -   :func:`build_set`: the set of one frame of a composite.
--   :func:`input_files`, :func:`image_files`, :func:`shot_files`, :func:`pattern_product`: the files a frame
-    reads.
 -   :func:`load_image`, :func:`cutout_texture`: image sources and cut-out textures.
 -   :func:`frame_state`, :func:`reference_distance`, :func:`sun_c_in_from_product`: what the shot and the sky
     products give the set.
@@ -37,6 +35,7 @@ import numpy as np
 
 from natscene.composite.maple import MapleOutline, extend_colours, warp_season_map
 from natscene.composite.meadow import build_meadow
+from natscene.composite.files import image_files, pattern_product, shot_files
 from natscene.composite.set_spec import Atmosphere, Film, Ground, SetSpec, sun_spectrum_from_rgb
 from natscene.composite.sky_dome import gradient_sky, shot_sky
 from natscene.composite.texture import MipTexture
@@ -45,18 +44,8 @@ from natscene.geometry import Camera, sun_direction
 from natscene.io import read_photo, read_yaml
 from natscene.spectral.grid import WavelengthGrid
 
-__all__ = ["image_files", "load_image", "pattern_product", "shot_files", "input_files", "cutout_texture",
+__all__ = ["load_image", "cutout_texture",
            "frame_state", "reference_distance", "build_set", "sun_c_in_from_product"]
-
-
-def image_files(source: dict, frame: int, results: str, root: str) -> list[str]:
-    """The file(s) an image source reads (empty for synthetic sources)."""
-    if "product" in source:
-        return [str(Path(results) / source["product"].format(frame=frame))]
-    if "path" in source:
-        p = Path(source["path"].format(frame=frame))
-        return [str(p if p.is_absolute() else Path(root) / p)]
-    return []
 
 
 def load_image(source: dict, frame: int, results: str, root: str, shape=(64, 64), key: str = "image") -> np.ndarray:
@@ -82,35 +71,6 @@ def load_image(source: dict, frame: int, results: str, root: str, shape=(64, 64)
         cols = np.asarray(c["colors"], np.float64)
         return cols[np.indices((n, n)).sum(0) % 2]
     raise InputError(f"config {key}: image source needs one of product, path, color, gradient, checker")
-
-
-def pattern_product(pattern: str) -> dict:
-    return {"product": f"patterns/{pattern}/color.exr"}
-
-
-def shot_files(shot: str, volume: str, frame: int, results: str) -> dict:
-    r = Path(results)
-    return {"state": str(r / f"shots/{shot}/params/{frame:04d}.yaml"),
-            "plate": str(r / f"shots/{shot}/frames/{frame:04d}.exr"),
-            "volume": str(r / f"volumes/{volume}/meta.yaml")}
-
-
-def input_files(entry: dict, frame: int, results: str, root: str, shot_cfg: dict | None = None) -> list[str]:
-    """Every file a composite frame reads (for the rule's input)."""
-    files = []
-    if entry.get("shot"):
-        files += list(shot_files(entry["shot"], shot_cfg["volume"], frame, results).values())
-    else:
-        files += image_files(entry["background"], frame, results, root)
-    files += image_files(entry["ground"]["texture"], frame, results, root)
-    meadow = entry.get("meadow") or {}
-    for f in meadow.get("flowers", []):
-        files += image_files(pattern_product(f["pattern"]), frame, results, root)
-    for src in (meadow.get("leaves") or {}).get("textures", []):
-        files += image_files(src, frame, results, root)
-    if entry["sun"].get("sky_product"):
-        files.append(str(Path(results) / entry["sun"]["sky_product"]))
-    return files
 
 
 def cutout_texture(rgba: np.ndarray) -> np.ndarray:
