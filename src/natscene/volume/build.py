@@ -25,7 +25,6 @@ import numpy as np
 
 from natscene.errors import InputError
 from natscene.volume.grid import Volume, import_grid, mean_optical_depth, placement
-from natscene.volume.procedural import KINDS, generate, statistics
 
 __all__ = ["build_volume", "world_box", "DEFAULT_SIZE_M", "DEFAULT_ALTITUDE_M"]
 
@@ -52,6 +51,7 @@ def world_box(spec: dict, resolution) -> tuple[np.ndarray, np.ndarray]:
 def build_volume(spec: dict, name: str = "volume", grid_path: str | None = None, threads: int | None = None,
                  progress=None) -> tuple[Volume, dict]:
     """Generate (or import) the volume described by a validated ``volumes.<name>`` entry; return it and stats."""
+    from natscene.volume.procedural import KINDS, generate, statistics   # numba, scipy: not for world_box
     kind = spec.get("kind", "cumulus")
     size = spec.get("size")
     altitude = spec.get("altitude")
