@@ -53,6 +53,16 @@ def _describe(error) -> str:
     return f"config key '{where}': {error.message}{expected}"
 
 
+@functools.lru_cache(maxsize=None)
+def _schema_file(path: Path, mtime_ns: int) -> dict:
+    """One schema file as parsed (by libyaml where PyYAML has it: the workflow parses the schemas on every run)."""
+    return yaml.load(path.read_text(), Loader=getattr(yaml, "CSafeLoader", yaml.SafeLoader))
+
+
+def _load_schema(path: Path) -> dict:
+    return _schema_file(path, path.stat().st_mtime_ns)
+
+
 def bundle_schema(path: str | os.PathLike) -> dict:
     """Load a schema and inline every ``$ref`` (other files, relative to the referring file, and local
     ``#/...`` pointers) into one document.
@@ -73,7 +83,7 @@ def bundle_schema(path: str | os.PathLike) -> dict:
             file_part, _, pointer = ref.partition("#")
             if file_part:
                 target_path = (base / file_part).resolve()
-                target_root = yaml.safe_load(target_path.read_text())
+                target_root = _load_schema(target_path)
                 target_base = target_path.parent
             else:
                 target_root, target_base = root, base
@@ -86,7 +96,7 @@ def bundle_schema(path: str | os.PathLike) -> dict:
             return out
         return {k: resolve(v, root, base) for k, v in node.items() if k != "$defs" or node is root}
 
-    root = yaml.safe_load(path.read_text())
+    root = _load_schema(path)
     bundled = resolve(root, root, path.parent)
     bundled.pop("$defs", None)
     return bundled
