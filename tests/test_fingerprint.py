@@ -89,6 +89,41 @@ def test_comments_docstrings_and_layout_do_not_count(tmp_path):
     assert script_fingerprint(script, pkg) != before
 
 
+def test_the_cache_on_disk_changes_nothing(tmp_path, monkeypatch):
+    """What the parse gives is kept on disk (natscene.fingerprint.cache_file), keyed by the files' bytes: a cold,
+    a warm (no file parsed: the parse raises) and a corrupt cache give the same fingerprint; an edit to the code
+    changes it though the cache holds the old one, to what a cold cache gives; an unwritable cache is no error."""
+    import json
+
+    import natscene.fingerprint as fp
+    pkg, script = _package(tmp_path)
+
+    def fresh(cache: Path) -> str:                       # as a new Snakemake process with this cache
+        monkeypatch.setenv("XDG_CACHE_HOME", str(cache))
+        monkeypatch.setattr(fp, "_CACHE", None)
+        fp._direct.cache_clear()
+        return script_fingerprint(script, pkg)
+
+    def boom(*args, **kwargs):
+        raise AssertionError("parsed although the cache holds the answer")
+
+    cold = fresh(tmp_path / "cache")
+    assert fp.cache_file() == tmp_path / "cache" / "natscene" / fp.cache_file().name and fp.cache_file().is_file()
+    with monkeypatch.context() as m:
+        m.setattr(fp, "imported_names", boom)
+        m.setattr(fp, "meaning", boom)
+        fp._file_meaning.cache_clear()
+        assert fresh(tmp_path / "cache") == cold
+    fp.cache_file().write_text('{"imports": [1, 2')
+    assert fresh(tmp_path / "cache") == cold
+    assert set(json.loads(fp.cache_file().read_text())) == {"imports", "fingerprints"}
+    (pkg / "dyn.py").write_text("Z = 3\n")              # reached through a lazy import, then importlib
+    edited = fresh(tmp_path / "cache")
+    assert edited != cold and edited == fresh(tmp_path / "cold")
+    (tmp_path / "a_file").write_text("")
+    assert fresh(tmp_path / "a_file" / "cache") == edited
+
+
 def test_every_module_of_the_package_has_a_meaning():
     """meaning() parses every natscene module; a trailing comment does not change it."""
     from natscene.fingerprint import meaning

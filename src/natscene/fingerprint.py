@@ -21,18 +21,80 @@ import, at module level or inside a function (lazy imports count), and every
 ``importlib.import_module("natscene.x")`` with a literal name; then the same for each module found,
 transitively. Importing ``natscene.a.b`` also executes the package ``__init__`` files on the way
 (``natscene/__init__.py``, ``natscene/a/__init__.py``), so those are part of the closure too.
+
+Parsing every file is most of a ``snakemake -n``'s own time, and Snakemake parses the workflow anew in every
+process, so what the parse gives is kept on disk (:func:`cache_file`, under ``$XDG_CACHE_HOME/natscene`` or
+``~/.cache/natscene``): a file's direct imports keyed by the sha256 of its bytes, a script's fingerprint keyed by
+the sha256 of its bytes and of every file of its closure with their paths. The keys are the bytes themselves, so
+an entry can never stand for other code; a missing, unreadable or corrupt cache is parsed afresh, and a cache that
+cannot be written is left alone.
 """
 from __future__ import annotations
 
 import ast
 import hashlib
+import json
+import os
+import sys
+import tempfile
 from functools import lru_cache
 from pathlib import Path
 
-__all__ = ["script_fingerprint", "import_closure", "closure_modules", "meaning"]
+__all__ = ["script_fingerprint", "import_closure", "closure_modules", "meaning", "cache_file"]
 
 PACKAGE = "natscene"
 PACKAGE_DIR = Path(__file__).resolve().parent
+CACHE_ENTRIES = 4096         # most entries of each kind the cache keeps (the newest)
+
+
+def cache_file() -> Path:
+    """Where the parse's results are kept: ``$XDG_CACHE_HOME/natscene/`` (``~/.cache/natscene/``), one file per
+    Python version (the syntax tree's dump, hence the fingerprint, may differ between versions)."""
+    base = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
+    return base / PACKAGE / f"fingerprints-py{sys.version_info[0]}.{sys.version_info[1]}.json"
+
+
+_CACHE: dict | None = None
+
+
+def _cache() -> dict:
+    global _CACHE
+    if _CACHE is None:
+        try:
+            data = json.loads(cache_file().read_text())
+            _CACHE = {k: dict(data[k]) for k in ("imports", "fingerprints")}
+        except (OSError, ValueError, KeyError, TypeError):
+            _CACHE = {"imports": {}, "fingerprints": {}}
+    return _CACHE
+
+
+def _remember(kind: str, key: str, value) -> None:
+    """Add one entry to the cache and write it (atomically: a concurrent reader sees the old file or the new)."""
+    entries = _cache()[kind]
+    entries[key] = value
+    while len(entries) > CACHE_ENTRIES:
+        del entries[next(iter(entries))]
+    f = cache_file()
+    try:
+        f.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(dir=f.parent, prefix=f.name, suffix=".tmp")
+        with os.fdopen(fd, "w") as out:
+            json.dump(_cache(), out)
+        os.replace(tmp, f)
+    except OSError:
+        pass
+
+
+@lru_cache(maxsize=None)
+def _bytes(path: Path, mtime_ns: int, size: int) -> tuple[bytes, str]:
+    data = path.read_bytes()
+    return data, hashlib.sha256(data).hexdigest()
+
+
+def _source(path: Path) -> tuple[bytes, str]:
+    """A file's bytes and their sha256 (read once per process and version of the file)."""
+    st = path.stat()
+    return _bytes(path, st.st_mtime_ns, st.st_size)
 
 
 def _module_file(dotted: str, package_dir: Path) -> Path | None:
@@ -100,7 +162,12 @@ def imported_names(source: str, module: str | None = None, is_package: bool = Fa
 def _direct(path: Path, package_dir: Path) -> tuple[Path, ...]:
     """natscene files imported directly by ``path`` (with their packages' ``__init__`` files)."""
     module = _module_name(path, package_dir)
-    names = imported_names(path.read_text(), module, path.name == "__init__.py")
+    data, sha = _source(path)
+    key = f"{sha}:{module}:{path.name == '__init__.py'}"
+    names = _cache()["imports"].get(key)
+    if names is None:
+        names = sorted(imported_names(data.decode(), module, path.name == "__init__.py"))
+        _remember("imports", key, names)
     files = set()
     for name in names:
         for dotted in _with_parents(name):
@@ -165,12 +232,21 @@ def script_fingerprint(script: str | Path, package_dir: str | Path = PACKAGE_DIR
     rerun the rule): this fingerprint, a param of every rule, is what reruns a rule whose code changed.
     """
     package_dir = Path(package_dir).resolve()
-    h = hashlib.sha256()
     script = Path(script)
+    closure = import_closure(script, package_dir)
+    k = hashlib.sha256(_source(script.resolve())[1].encode())
+    for f in closure:
+        k.update(f"\0{f.relative_to(package_dir)}\0{_source(f)[1]}".encode())
+    key = k.hexdigest()
+    cached = _cache()["fingerprints"].get(key)
+    if cached is not None:
+        return cached
+    h = hashlib.sha256()
     h.update(b"script\0")
     h.update(_file_meaning(script.resolve(), script.stat().st_mtime_ns))
-    for f in import_closure(script, package_dir):
+    for f in closure:
         h.update(str(f.relative_to(package_dir)).encode())
         h.update(b"\0")
         h.update(_file_meaning(f, f.stat().st_mtime_ns))
+    _remember("fingerprints", key, h.hexdigest()[:16])
     return h.hexdigest()[:16]
