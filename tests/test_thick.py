@@ -74,9 +74,9 @@ def test_thick_heap_tables_match_volpath(refs, heap_tables, name):
     _agree(img, _ref(refs, name), tb.footprint > 0, f"tables {name}")
 
 
-@pytest.mark.parametrize("name", ["blob_t100", pytest.param("blob_t300", marks=pytest.mark.xfail(
+@pytest.mark.parametrize("name", ["blob_t100", pytest.param("blob_t300", marks=[pytest.mark.gaps, pytest.mark.xfail(
     strict=True, reason="the far 8x8 block 12 % high at depth 300 (1.06 and 1.18 in the two runs: the light of more "
-                        "than 4096 collisions that lights it comes from few photons; the tables' are within 3.3 %)"))])
+                        "than 4096 collisions that lights it comes from few photons; the tables' are within 3.3 %)")])])
 def test_thick_heap_render_matches_volpath(refs, heap_tables, name):
     """The forward renderer: the mean of two runs (one run's 8x8 blocks scatter by up to 8 % at depth 300)."""
     vol, tb = heap_tables
