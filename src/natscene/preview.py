@@ -9,7 +9,8 @@ Defines the text labels on preview images (contact sheets, pattern sheets): the 
 :func:`label` paints a line of text with OpenCV's Hershey simplex font (anti-aliased) on an 8-bit RGB image, in
 one of three looks:
 
-- ``"outlined"`` (default): white text with a black outline 2 px wider than the stroke, readable on any tile;
+- ``"outlined"`` (default): white text in a black outline a pixel wide (the text's own shape grown by a 3 x 3
+  dilation), readable on any tile;
   the font scale grows with the image height, max(0.4, H / 600), the stroke with the scale (the fit's contact
   sheet, :mod:`natscene.fit.report`);
 - ``"table"``: thin yellow text, font scale max(0.3, W / 640) from the image width (the contact sheet of the
@@ -42,8 +43,14 @@ def label(image: np.ndarray, text: str, style: str = "outlined") -> np.ndarray:
         scale = max(0.4, h / 600.0)
         thick = max(1, int(round(2 * scale)))
         org = (5, int(24 * scale) + 5)
-        cv2.putText(out, text, org, font, scale, BLACK, thick + 2, aa)
-        cv2.putText(out, text, org, font, scale, WHITE, thick, aa)
+        # the black outline is the white text grown by a pixel (a thicker putText advances its glyphs further,
+        # so its letters drift right of the white ones, a ghost letter at the end)
+        text_mask = np.zeros((h, w), np.uint8)
+        cv2.putText(text_mask, text, org, font, scale, 255, thick, aa)
+        outline = cv2.dilate(text_mask, np.ones((3, 3), np.uint8))
+        for mask, colour in ((outline, BLACK), (text_mask, WHITE)):
+            a = mask[..., None].astype(np.float32) / 255.0
+            out[...] = np.round(out * (1.0 - a) + np.asarray(colour, np.float32) * a).astype(np.uint8)
     elif style == "table":
         scale = max(0.3, w / 640)
         cv2.putText(out, text, (3, int(28 * scale)), font, scale, YELLOW, 1, aa)
