@@ -69,11 +69,15 @@ def _cache() -> dict:
 
 
 def _remember(kind: str, key: str, value) -> None:
-    """Add one entry to the cache and write it (atomically: a concurrent reader sees the old file or the new)."""
+    """Add one entry to the cache in memory (:func:`_save` writes it)."""
     entries = _cache()[kind]
     entries[key] = value
     while len(entries) > CACHE_ENTRIES:
         del entries[next(iter(entries))]
+
+
+def _save() -> None:
+    """Write the cache (atomically: a concurrent reader sees the old file or the new)."""
     f = cache_file()
     try:
         f.parent.mkdir(parents=True, exist_ok=True)
@@ -221,8 +225,9 @@ def meaning(source: str) -> str:
 
 
 @lru_cache(maxsize=None)
-def _file_meaning(path: Path, mtime_ns: int) -> bytes:
-    return meaning(path.read_text()).encode()
+def _file_meaning(path: Path, sha: str) -> bytes:
+    """:func:`meaning` of a file whose bytes have the sha256 ``sha`` (:func:`_source`)."""
+    return meaning(_source(path)[0].decode()).encode()
 
 
 def script_fingerprint(script: str | Path, package_dir: str | Path = PACKAGE_DIR) -> str:
@@ -243,10 +248,11 @@ def script_fingerprint(script: str | Path, package_dir: str | Path = PACKAGE_DIR
         return cached
     h = hashlib.sha256()
     h.update(b"script\0")
-    h.update(_file_meaning(script.resolve(), script.stat().st_mtime_ns))
+    h.update(_file_meaning(script.resolve(), _source(script.resolve())[1]))
     for f in closure:
         h.update(str(f.relative_to(package_dir)).encode())
         h.update(b"\0")
-        h.update(_file_meaning(f, f.stat().st_mtime_ns))
+        h.update(_file_meaning(f, _source(f)[1]))
     _remember("fingerprints", key, h.hexdigest()[:16])
+    _save()
     return h.hexdigest()[:16]
