@@ -296,7 +296,9 @@ def test_real_compose_on_restricted_tables_equals_full_image():
     assert np.allclose(full, mine, rtol=1e-4, atol=1e-5)  # the contract's Eq. 4 = this file's transcription
 
 
-def test_numba_and_numpy_backends_count_identically():
+@pytest.mark.parametrize("n_levels", [256, 1024])
+def test_numba_and_numpy_backends_count_identically(n_levels):
+    """The compiled search (its level table narrowed to 8 or 16 bits) counts what the numpy one does."""
     from natscene.fit import kappa as kmod
     if kmod._nb is None:
         pytest.skip("numba not importable")
@@ -306,6 +308,7 @@ def test_numba_and_numpy_backends_count_identically():
     t_c = rng.random(n).astype(np.float32) * 1.5
     target = rng.random((500, 3)).astype(np.float32)
     cloud = (rng.random((7, n, 3)) * 1.3).astype(np.float32)  # some values saturate above 1
-    a = KappaSearch(sky, t_c, target, backend="numpy").channel_distances(cloud)
-    b = KappaSearch(sky, t_c, target, backend="numba").channel_distances(cloud)
+    levels = Levels(n_levels)
+    a = KappaSearch(sky, t_c, target, levels=levels, backend="numpy").channel_distances(cloud)
+    b = KappaSearch(sky, t_c, target, levels=levels, backend="numba").channel_distances(cloud)
     assert np.array_equal(a, b)

@@ -20,7 +20,8 @@ computed once per pixel. Two interchangeable back ends count the P x 3 x K histo
 individual, the 3 x K images of levels are built in one pass and all their histograms counted by a single
 ``np.bincount`` on offset level indices) and, where numba is importable (it ships with the declared
 dependencies prosail and miepython), one fused compiled loop over (individual, channel) in parallel that
-never materialises the 3 x K images. Both perform the same float32 operations and give identical counts.
+never materialises the 3 x K images (its level lookup table held in the narrowest integer type, which keeps it in
+the L1 cache). Both perform the same float32 operations and give identical counts.
 
 References
 ----------
@@ -121,6 +122,9 @@ class KappaSearch:
         if target.shape[0] == 0:
             raise ValueError("no photo cloud pixels")
         nl = self.levels.n_levels
+        # the levels' lookup table in the narrowest integer type: 8 KB at 256 levels, where int32's 32 KB would
+        # fill the core's L1 cache beside the histograms (the compiled search takes 2/3 of the time)
+        self._lut = self.levels.lut.astype(np.uint8 if nl <= 256 else np.uint16)
         k = len(self.kappas)
         self._offsets = (np.arange(3 * k, dtype=np.int32) * nl).reshape(3, k, 1)
         if metric == "pixel_ssd":
@@ -156,7 +160,7 @@ class KappaSearch:
         k = len(self.kappas)
         if self.metric != "pixel_ssd" and self.backend == "numba":
             cl = np.ascontiguousarray(np.moveaxis(cloud, -1, 1))  # (P, 3, N)
-            counts = _numba_kernel()(cl, self.sky, self.att, self.levels.lut, self.levels.lut_size, nl)
+            counts = _numba_kernel()(cl, self.sky, self.att, self._lut, self.levels.lut_size, nl)
             h = counts / self.n_pixels
             return channel_distance(h, self.target_hist[None, :, None, :], self.metric)
         out = np.empty((p_count, 3, k))
