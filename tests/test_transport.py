@@ -10,6 +10,7 @@ References known independently of the code under test:
   transmittance) and energy conservation (reflected + transmitted flux = incident flux at albedo 1);
 - the white furnace: a non-absorbing cloud under a uniform sky of radiance L has radiance L everywhere.
 """
+from contextlib import contextmanager
 from dataclasses import replace
 from pathlib import Path
 
@@ -19,6 +20,7 @@ import pytest
 import natscene  # noqa: F401
 from natscene.config import default_settings
 from natscene.errors import ConfigError, InputError
+import natscene.scatter.allorders as allorders
 from natscene.scatter.allorders import AllOrdersSettings, Lighting, Scene, frame_settings, view_images
 from natscene.scatter.bands import (ORDER_BINS, SUN_BANDS, band_table, band_weights, channel_weights, check_bands,
                                     order_distribution)
@@ -93,18 +95,55 @@ def composed(tables, references):
             for k, ref in references.items()}
 
 
+@contextmanager
+def photons_shared_across_beta():
+    """Within the block the forward renderer traces its photons once per (sigma_t, g, settings, seed) and reuses
+    them for every beta: its photon run (:func:`natscene.scatter.allorders.view_images`) does not depend on beta,
+    which only weights the run's order bands, so a second run with the same seed would trace the same photons
+    (the renders are the same to the bit; a third of the time for three betas). Yields the runs traced."""
+    trace, runs = allorders.view_images, {}
+
+    def traced_once(scene, camera, sigma, g, seed=0, **kw):
+        key = (float(sigma), float(g), seed, repr(scene.settings), repr(sorted(kw.items())))
+        if key not in runs:
+            runs[key] = trace(scene, camera, sigma, g, seed=seed, **kw)
+        return runs[key]
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(allorders, "view_images", traced_once)
+        yield runs
+
+
+def test_photons_shared_across_beta_render_what_fresh_photons_do(vol):
+    """The sharing the volpath comparisons below use holds: renders at two betas from one photon run equal, to the
+    bit, the renders that trace their photons each (same seed), from one trace, and differ from each other."""
+    st = replace(RENDER_SETTINGS, sun_collisions=300_000)
+
+    def image(b):
+        return render(vol, CAM, SUN, _params(0.5, 0.85, b), np.zeros(3, np.float32), {"seed": 2}, skylight=False,
+                      all_orders=st)
+
+    fresh = [image(b) for b in (0.9, 0.999)]
+    with photons_shared_across_beta() as runs:
+        shared = [image(b) for b in (0.9, 0.999)]
+    assert len(runs) == 1
+    assert np.array_equal(fresh[0], shared[0]) and np.array_equal(fresh[1], shared[1])
+    assert not np.array_equal(shared[0], shared[1])
+
+
 @pytest.fixture(scope="module")
 def rendered(vol, tables, references):
     """Forward renders (one photon run per (sigma_t, g); beta only reweights the bands), their ratios to
     volpath and to the composed tables."""
     foot = tables.footprint > 0
     out = {}
-    for (s, g, b), ref in references.items():
-        img = render(vol, CAM, SUN, _params(s, g, b), np.zeros(3, np.float32), {"seed": 5}, skylight=False,
-                     all_orders=RENDER_SETTINGS)[..., 0]
-        tab = compose(tables, _params(s, g, b), np.zeros((CAM.height, CAM.width, 3), np.float32))[0][..., 0]
-        out[s, g, b] = _ratios(img, ref, foot, f"render sigma_t={s} g={g} beta={b}") + (
-            img[foot].mean() / tab[foot].mean(),)
+    with photons_shared_across_beta():
+        for (s, g, b), ref in references.items():
+            img = render(vol, CAM, SUN, _params(s, g, b), np.zeros(3, np.float32), {"seed": 5}, skylight=False,
+                         all_orders=RENDER_SETTINGS)[..., 0]
+            tab = compose(tables, _params(s, g, b), np.zeros((CAM.height, CAM.width, 3), np.float32))[0][..., 0]
+            out[s, g, b] = _ratios(img, ref, foot, f"render sigma_t={s} g={g} beta={b}") + (
+                img[foot].mean() / tab[foot].mean(),)
     return out
 
 
@@ -316,11 +355,12 @@ def test_p1_tallies_from_order_33_match_volpath(vol, tables, references, s):
     is strongest: the forward render against volpath, every order, the mean over cloud pixels within 3 % and
     every 8x8 block within 10 % (as the plain tallies; measured 0.998-1.008, blocks 0.943-1.079)."""
     foot = tables.footprint > 0
-    for b in (0.9, 0.999):
-        img = render(vol, CAM, SUN, _params(s, 0.85, b), np.zeros(3, np.float32), {"seed": 5}, skylight=False,
-                     all_orders=replace(RENDER_SETTINGS, p1_order=33))[..., 0]
-        mean, blk = _ratios(img, references[s, 0.85, b], foot, f"P1 from 33: render sigma_t={s} g=0.85 beta={b}")
-        assert abs(mean - 1) <= 0.03 and np.all(np.abs(blk - 1) <= 0.10), (mean, blk.min(), blk.max())
+    with photons_shared_across_beta():
+        for b in (0.9, 0.999):
+            img = render(vol, CAM, SUN, _params(s, 0.85, b), np.zeros(3, np.float32), {"seed": 5}, skylight=False,
+                         all_orders=replace(RENDER_SETTINGS, p1_order=33))[..., 0]
+            mean, blk = _ratios(img, references[s, 0.85, b], foot, f"P1 from 33: render sigma_t={s} g=0.85 beta={b}")
+            assert abs(mean - 1) <= 0.03 and np.all(np.abs(blk - 1) <= 0.10), (mean, blk.min(), blk.max())
 
 
 def test_sky_dome_lights_the_shadow_side(vol):
