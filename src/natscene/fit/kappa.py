@@ -123,7 +123,7 @@ class KappaSearch:
             raise ValueError("no photo cloud pixels")
         nl = self.levels.n_levels
         # the levels' lookup table in the narrowest integer type: 8 KB at 256 levels, where int32's 32 KB would
-        # fill the core's L1 cache beside the histograms (the compiled search takes 2/3 of the time)
+        # fill the core's L1 cache beside the histograms
         self._lut = self.levels.lut.astype(np.uint8 if nl <= 256 else np.uint16)
         k = len(self.kappas)
         self._offsets = (np.arange(3 * k, dtype=np.int32) * nl).reshape(3, k, 1)
