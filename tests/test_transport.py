@@ -104,7 +104,10 @@ def photons_shared_across_beta():
     trace, runs = allorders.view_images, {}
 
     def traced_once(scene, camera, sigma, g, seed=0, **kw):
-        key = (float(sigma), float(g), seed, repr(scene.settings), repr(sorted(kw.items())))
+        # everything the run reads but beta; a scene with a sky dome (a new object each render) is never shared
+        key = (float(sigma), float(g), seed, repr(scene.settings), repr(sorted(kw.items())), repr(camera),
+               id(scene.volume), scene.med.sun_dir.tobytes(), id(scene.sky) if scene.sky is not None else None,
+               scene.shadow_seed)
         if key not in runs:
             runs[key] = trace(scene, camera, sigma, g, seed=seed, **kw)
         return runs[key]
